@@ -1,0 +1,39 @@
+"""pendulum_lab: Hamiltonian mechanics and geometric integration, through pendulums.
+
+Layers, each using only the ones before it:
+
+``mechanics`` (SymPy derivation) -> ``model`` (numeric, lambdified) ->
+``integrators`` (one-step maps of Hamiltonian vector fields) -> ``simulate``.
+
+Quick start
+-----------
+>>> import pendulum_lab as pl
+>>> dp = pl.double_pendulum()
+>>> traj = pl.simulate(dp, [2.0, 2.5], [0.0, 0.0], t_end=1.0, dt=0.01, method="glrk4")
+>>> bool(abs(traj.energy[-1] - traj.energy[0]) < 1e-6)
+True
+"""
+
+from .integrators import METHODS, ConvergenceError, Method, get_method
+from .mechanics import Chain, derive_chain
+from .model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from .simulate import Trajectory, hamiltonian_field, simulate, step
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "METHODS",
+    "Chain",
+    "ConvergenceError",
+    "Method",
+    "PendulumModel",
+    "Trajectory",
+    "derive_chain",
+    "double_pendulum",
+    "get_method",
+    "hamiltonian_field",
+    "n_pendulum",
+    "simple_pendulum",
+    "simulate",
+    "step",
+]

@@ -1,0 +1,191 @@
+"""The integrators' mathematics: order, symplecticity, reversibility, energy.
+
+Every property check is paired with a negative control: a method that must
+fail the same check, so the check is shown able to fail.
+"""
+
+import numpy as np
+import pytest
+
+import pendulum_lab as pl
+from pendulum_lab import analysis
+from pendulum_lab.integrators import (
+    GAUSS4_TABLEAU,
+    MAIN_METHODS,
+    RK4_TABLEAU,
+    ButcherTableau,
+    solve_fixed_point,
+)
+
+DP = pl.double_pendulum(m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81)
+SP = pl.simple_pendulum(mass=1.0, length=1.0, g=9.81)
+SYMPLECTIC = ("semi_implicit_euler", "leapfrog", "glrk4")
+NOT_SYMPLECTIC = ("explicit_euler", "rk4", "semi_implicit_euler_velocity", "leapfrog_velocity")
+
+
+# ---------------------------------------------------------------- tableaus
+@pytest.mark.parametrize("tableau", [RK4_TABLEAU, GAUSS4_TABLEAU])
+def test_tableau_satisfies_order_four_conditions(tableau):
+    a, b, c = tableau.a, tableau.b, tableau.c
+    conditions = [
+        (b.sum(), 1.0), (b @ c, 1 / 2), (b @ c**2, 1 / 3), (b @ a @ c, 1 / 6),
+        (b @ c**3, 1 / 4), (b @ (c * (a @ c)), 1 / 8), (b @ a @ c**2, 1 / 12),
+        (b @ a @ a @ c, 1 / 24),
+    ]
+    for value, expected in conditions:
+        assert abs(value - expected) < 1e-15
+
+
+def test_gauss_legendre_tableau_is_the_reports_and_is_implicit():
+    r3 = np.sqrt(3)
+    assert np.allclose(GAUSS4_TABLEAU.c, [0.5 - r3 / 6, 0.5 + r3 / 6], atol=0, rtol=1e-15)
+    assert np.allclose(GAUSS4_TABLEAU.a, [[0.25, 0.25 - r3 / 6], [0.25 + r3 / 6, 0.25]])
+    assert not GAUSS4_TABLEAU.explicit and RK4_TABLEAU.explicit
+
+
+def test_inconsistent_tableau_is_rejected():
+    with pytest.raises(ValueError, match="sum to 1"):
+        ButcherTableau(a=[[0, 0], [0.5, 0]], b=[0.5, 0.6], c=[0, 0.5], order=2)
+    with pytest.raises(ValueError, match="row sums"):
+        ButcherTableau(a=[[0, 0], [0.4, 0]], b=[0, 1], c=[0, 0.5], order=2)
+
+
+def test_method_registry_properties():
+    expected = {"explicit_euler": (1, False), "semi_implicit_euler": (1, True),
+                "leapfrog": (2, True), "rk4": (4, False), "glrk4": (4, True)}
+    for name, (order, symplectic) in expected.items():
+        method = pl.METHODS[name]
+        assert (method.order, method.symplectic) == (order, symplectic)
+    assert pl.METHODS["glrk4"].implicit and not pl.METHODS["rk4"].implicit
+    for name in ("semi_implicit_euler_velocity", "leapfrog_velocity"):
+        assert pl.METHODS[name].variables == "velocity" and not pl.METHODS[name].symplectic
+
+
+# ---------------------------------------------------------------- order
+@pytest.fixture(scope="module")
+def dp_reference():
+    return analysis.reference_solution(DP, [0.8, 1.2], [0.0, 0.0], 1.0)
+
+
+@pytest.fixture(scope="module")
+def sp_reference():
+    return analysis.reference_solution(SP, [1.2], [0.0], 1.0)
+
+
+ORDER_DTS = (0.01, 0.005, 0.0025, 0.00125)
+
+
+@pytest.mark.parametrize("name", MAIN_METHODS)
+def test_observed_order_double_pendulum(name, dp_reference):
+    result = analysis.observed_order(DP, name, [0.8, 1.2], [0.0, 0.0], 1.0, ORDER_DTS,
+                                     reference=dp_reference)
+    assert abs(result.slope - pl.METHODS[name].order) <= 0.15, result
+
+
+@pytest.mark.parametrize("name", MAIN_METHODS)
+def test_observed_order_simple_pendulum(name, sp_reference):
+    result = analysis.observed_order(SP, name, [1.2], [0.0], 1.0, ORDER_DTS,
+                                     reference=sp_reference)
+    assert abs(result.slope - pl.METHODS[name].order) <= 0.15, result
+
+
+def test_velocity_leapfrog_is_only_first_order_on_the_double_pendulum(dp_reference):
+    # The report's leapfrog on (theta, omega) evaluates a velocity-dependent
+    # acceleration at a half-step Euler velocity: it loses an order.
+    result = analysis.observed_order(DP, "leapfrog_velocity", [0.8, 1.2], [0.0, 0.0], 1.0,
+                                     ORDER_DTS, reference=dp_reference)
+    assert abs(result.slope - 1.0) <= 0.15, result
+
+
+# ---------------------------------------------------------------- symplecticity
+Q0 = np.array([2.0, 2.5])
+P0 = DP.momenta(Q0, [0.3, -0.2])
+
+
+@pytest.mark.parametrize("name", SYMPLECTIC)
+def test_symplectic_methods_preserve_the_symplectic_form(name):
+    assert analysis.symplecticity_defect(DP, name, Q0, P0, 0.05) <= 1e-8
+
+
+@pytest.mark.parametrize("name", NOT_SYMPLECTIC)
+def test_non_symplectic_methods_fail_the_same_check(name):
+    worst_symplectic = max(analysis.symplecticity_defect(DP, m, Q0, P0, 0.05) for m in SYMPLECTIC)
+    defect = analysis.symplecticity_defect(DP, name, Q0, P0, 0.05)
+    assert defect >= 100 * max(worst_symplectic, 1e-8)
+
+
+def test_velocity_methods_are_symplectic_for_the_simple_pendulum():
+    # With a constant mass matrix (theta, omega) are canonical up to a factor.
+    for name in ("semi_implicit_euler_velocity", "leapfrog_velocity"):
+        assert analysis.symplecticity_defect(SP, name, [2.0], [0.5], 0.05) <= 1e-8
+
+
+# ---------------------------------------------------------------- reversibility
+@pytest.mark.parametrize("name", ["leapfrog", "glrk4"])
+def test_symmetric_methods_are_reversible(name):
+    assert analysis.reversibility_error(DP, name, Q0, P0, 0.05) <= 1e-12
+
+
+@pytest.mark.parametrize("name", ["rk4", "semi_implicit_euler"])
+def test_non_symmetric_methods_are_not_reversible(name):
+    assert analysis.reversibility_error(DP, name, Q0, P0, 0.05) > 1e-8
+
+
+# ---------------------------------------------------------------- long-run energy
+@pytest.fixture(scope="module")
+def long_runs():
+    return {name: pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=1000.0, dt=0.01, method=name)
+            for name in ("glrk4", "leapfrog", "rk4")}
+
+
+@pytest.mark.parametrize("name", ["glrk4", "leapfrog"])
+def test_symplectic_energy_error_stays_bounded(long_runs, name):
+    first, last = analysis.energy_growth(long_runs[name])
+    assert last <= 3 * first, (first, last)
+
+
+def test_rk4_energy_error_grows(long_runs):
+    first, last = analysis.energy_growth(long_runs["rk4"])
+    assert last > 3 * first, (first, last)
+
+
+# ---------------------------------------------------------------- against SciPy
+@pytest.mark.parametrize("name, dt, tol", [("rk4", 0.001, 1e-8), ("glrk4", 0.002, 1e-8)])
+def test_agreement_with_dop853(name, dt, tol):
+    theta_ref, omega_ref = analysis.reference_solution(DP, [1.0, 1.5], [0.0, 0.0], 5.0, 1e-12)
+    traj = pl.simulate(DP, [1.0, 1.5], [0.0, 0.0], t_end=5.0, dt=dt, method=name)
+    assert np.max(np.abs(traj.theta[-1] - theta_ref)) < tol
+    assert np.max(np.abs(traj.omega[-1] - omega_ref)) < tol * 10
+
+
+# ---------------------------------------------------------------- implicit solver
+def test_fixed_point_solver_converges_to_roundoff():
+    x, iterations, converged = solve_fixed_point(np.cos, np.array([[1.0], [0.2]]))
+    assert converged and iterations < 100
+    assert np.max(np.abs(x - 0.7390851332151607)) < 1e-15
+
+
+def test_fixed_point_solver_reports_divergence():
+    _, _, converged = solve_fixed_point(lambda x: 2.0 * x + 1.0, np.array([1.0]))
+    assert not converged
+
+
+def test_glrk4_too_large_dt_raises_naming_step_and_time():
+    with pytest.raises(pl.ConvergenceError, match=r"step \d+, t = [0-9.]+"):
+        pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=20.0, dt=0.6, method="glrk4")
+
+
+def test_symplectic_methods_are_explicit_for_the_separable_simple_pendulum():
+    for name in ("semi_implicit_euler", "leapfrog"):
+        traj = pl.simulate(SP, [1.0], [0.0], t_end=1.0, dt=0.01, method=name)
+        assert traj.mean_iterations == 0
+    traj = pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=1.0, dt=0.01, method="leapfrog")
+    assert traj.mean_iterations > 2
+
+
+def test_simple_pendulum_symplectic_euler_is_the_textbook_update():
+    q, p, h = np.array([0.7]), np.array([0.3]), 0.1
+    q1, p1 = pl.step(SP, "semi_implicit_euler", q, p, h)
+    p_expected = p - h * 9.81 * np.sin(q)
+    assert np.allclose(p1, p_expected, rtol=0, atol=1e-15)
+    assert np.allclose(q1, q + h * p_expected, rtol=0, atol=1e-15)
