@@ -14,7 +14,7 @@ from pendulum_lab.integrators import (
     MAIN_METHODS,
     RK4_TABLEAU,
     ButcherTableau,
-    solve_fixed_point,
+    fixed_point_status,
 )
 
 DP = pl.double_pendulum(m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81)
@@ -159,19 +159,45 @@ def test_agreement_with_dop853(name, dt, tol):
 
 
 # ---------------------------------------------------------------- implicit solver
-def test_fixed_point_solver_converges_to_roundoff():
-    x, iterations, converged = solve_fixed_point(np.cos, np.array([[1.0], [0.2]]))
-    assert converged and iterations < 100
+def iterate(g, x0, max_sweeps=100):
+    """Drive the integrators' stopping rule the way the implicit steps do."""
+    x, smallest = np.asarray(x0, float), np.full(np.shape(x0), np.inf)
+    for sweep in range(1, max_sweeps + 1):
+        x_new = g(x)
+        status = fixed_point_status(x_new, x, smallest)
+        x = x_new
+        if status != 0:
+            return x, sweep, status
+    return x, max_sweeps, 0
+
+
+def test_stopping_rule_iterates_to_roundoff():
+    x, sweeps, status = iterate(np.cos, [1.0, 0.2])
+    assert status == 1 and sweeps < 100
     assert np.max(np.abs(x - 0.7390851332151607)) < 1e-15
 
 
-def test_fixed_point_solver_reports_divergence():
-    _, _, converged = solve_fixed_point(lambda x: 2.0 * x + 1.0, np.array([1.0]))
-    assert not converged
+def test_stopping_rule_does_not_stop_on_a_small_but_shrinking_increment():
+    # x <- x/2 from 1e-9: increments drop below the round-off tolerance after a
+    # few sweeps but keep halving. A max-norm tolerance stops there; our rule
+    # keeps going while any increment still shrinks.
+    halve = lambda x: 0.5 * x  # noqa: E731
+    x, sweeps, status = iterate(halve, [1e-9], max_sweeps=30)
+    assert status == 0 and x[0] < 1e-17
+    tolerance_stop = next(k for k in range(1, 30) if 1e-9 * 0.5**k <= 1e-11)
+    assert tolerance_stop < 10
+
+
+def test_stopping_rule_reports_divergence_and_non_finite():
+    _, sweeps, status = iterate(lambda x: 2.0 * x + 1.0, [1.0], max_sweeps=50)
+    assert status == 0 and sweeps == 50  # never accepted
+    with np.errstate(over="ignore"):
+        _, _, status = iterate(lambda x: np.exp(x * 1e3), [1.0])
+    assert status == -1
 
 
 def test_glrk4_too_large_dt_raises_naming_step_and_time():
-    with pytest.raises(pl.ConvergenceError, match=r"step \d+, t = [0-9.]+"):
+    with pytest.raises(pl.ConvergenceError, match=r"at step \d+ \(t = [0-9.]+"):
         pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=20.0, dt=0.6, method="glrk4")
 
 

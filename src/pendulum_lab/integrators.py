@@ -1,15 +1,23 @@
-"""One-step integrators for Hamiltonian systems.
+"""One-step integrators for Hamiltonian systems, compiled with Numba.
 
-This module knows vector fields, not pendulums. A :class:`HamiltonianField`
-bundles ``dH/dq(q, p)`` and ``dH/dp(q, p)`` (and, for the course report's
-velocity-variable methods, the acceleration ``a(q, v)``). Every method maps a
-state ``(x, y)`` to the next one; ``y`` is the canonical momentum ``p`` for
-all methods except the two ``*_velocity`` ones, where it is the velocity.
+This module knows vector fields, not pendulums. A vector field is a pair of
+compiled kernels (see :mod:`pendulum_lab._signatures`):
+``hamilton(q, p, params, dq, dp)`` writes ``dq = dH/dp`` and ``dp = -dH/dq``;
+``acceleration(q, v, params, out)`` writes the acceleration for the course
+report's velocity-variable methods.
+
+Every method is a step function ``(hamilton, acceleration, q, p, h, params,
+separable) -> (q1, p1, sweeps, calls)``: ``p`` is the canonical momentum for
+all methods except the two ``*_velocity`` ones, where it is the velocity;
+``sweeps`` counts implicit-solver iterations (``-1``: did not converge) and
+``calls`` the vector-field evaluations. :func:`run` drives any of them over
+many steps and many initial states; it is the only time loop.
 
 Methods are data where they can be: explicit Euler and RK4 are Butcher
-tableaus run by :func:`explicit_rk_step`; Gauss-Legendre is a tableau plus the
-implicit stage solver :func:`solve_fixed_point`. The symplectic partitioned
-methods are short functions whose lines follow the textbook formulas.
+tableaus run by :func:`explicit_rk`. Gauss-Legendre is a tableau whose stage
+equations are solved by fixed-point iteration. The symplectic partitioned
+methods follow the textbook formulas line by line. All implicit equations are
+iterated to round-off with one stopping rule, :func:`fixed_point_status`.
 
 References
 ----------
@@ -23,10 +31,14 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
+from numba import types
+
+from ._signatures import ACCELERATION, HAMILTON, VECTOR
 
 __all__ = [
     "METHODS",
@@ -34,12 +46,11 @@ __all__ = [
     "ConvergenceError",
     "HamiltonianField",
     "Method",
-    "explicit_rk_step",
+    "explicit_rk",
+    "fixed_point_status",
     "get_method",
-    "solve_fixed_point",
+    "run",
 ]
-
-Array = np.ndarray
 
 
 class ConvergenceError(RuntimeError):
@@ -48,27 +59,22 @@ class ConvergenceError(RuntimeError):
 
 @dataclass(frozen=True)
 class HamiltonianField:
-    """The vector field of ``H(q, p)``, as the integrators see it.
+    """A Hamiltonian vector field as the integrators see it.
 
     Attributes
     ----------
-    dH_dq, dH_dp : callable ``(q, p) -> array (..., n)``
-    acceleration : callable ``(q, v) -> array (..., n)``, optional
-        Only used by the velocity-variable methods.
+    hamilton, acceleration : compiled kernels (see :mod:`pendulum_lab._signatures`)
+    params : ndarray
+        Parameters passed through to the kernels.
     separable : bool
-        True when ``dH/dq`` does not depend on ``p`` and ``dH/dp`` not on ``q``;
+        True when ``dH/dq`` does not depend on ``p`` nor ``dH/dp`` on ``q``;
         the symplectic methods are then explicit.
     """
 
-    dH_dq: Callable[[Array, Array], Array]
-    dH_dp: Callable[[Array, Array], Array]
-    acceleration: Callable[[Array, Array], Array] | None = None
-    separable: bool = False
-
-    def rhs(self, y: Array) -> Array:
-        """``(dH/dp, -dH/dq)`` on the stacked state ``y = (q, p)``, shape ``(..., 2n)``."""
-        q, p = np.split(y, 2, axis=-1)
-        return np.concatenate([self.dH_dp(q, p), -self.dH_dq(q, p)], axis=-1)
+    hamilton: object
+    acceleration: object
+    params: np.ndarray
+    separable: bool
 
 
 # --------------------------------------------------------------------------- tableaus
@@ -111,7 +117,7 @@ RK4_TABLEAU = ButcherTableau(
     c=[0, 0.5, 0.5, 1],
     order=4,
 )
-_R3 = np.sqrt(3.0)
+_R3 = math.sqrt(3.0)
 # Two-stage Gauss-Legendre collocation (the course report, section 2.4.5).
 GAUSS4_TABLEAU = ButcherTableau(
     a=[[1 / 4, 1 / 4 - _R3 / 6], [1 / 4 + _R3 / 6, 1 / 4]],
@@ -119,67 +125,273 @@ GAUSS4_TABLEAU = ButcherTableau(
     c=[1 / 2 - _R3 / 6, 1 / 2 + _R3 / 6],
     order=4,
 )
+# Numba freezes module-level arrays into the compiled code as constants.
+_EULER_A, _EULER_B = EULER_TABLEAU.a, EULER_TABLEAU.b
+_RK4_A, _RK4_B = RK4_TABLEAU.a, RK4_TABLEAU.b
+_GAUSS_A, _GAUSS_B = GAUSS4_TABLEAU.a, GAUSS4_TABLEAU.b
 
-
-def explicit_rk_step(tableau: ButcherTableau, f: Callable[[Array], Array], y: Array, h: float):
-    """One step of an explicit Runge-Kutta method for the autonomous ``y' = f(y)``."""
-    k = []
-    for i in range(tableau.stages):
-        yi = y
-        for j in range(i):
-            if tableau.a[i, j] != 0.0:
-                yi = yi + (h * tableau.a[i, j]) * k[j]
-        k.append(f(yi))
-    return y + h * sum(bi * ki for bi, ki in zip(tableau.b, k))
-
+# --------------------------------------------------------------------------- kernel types
+HamiltonFn = types.FunctionType(HAMILTON)
+AccelerationFn = types.FunctionType(ACCELERATION)
+STEP = types.Tuple((VECTOR, VECTOR, types.int64, types.int64))(
+    HamiltonFn, AccelerationFn, VECTOR, VECTOR, types.float64, VECTOR, types.boolean
+)
+jit_step = numba.njit(STEP, cache=True)
 
 # --------------------------------------------------------------------------- implicit solver
-MAX_ITERATIONS = 100
+MAX_SWEEPS = 100
 # A stalled iteration counts as converged only if its last increment is this
 # small relative to the unknowns: stalling far from round-off means divergence.
 ROUNDOFF_TOLERANCE = 1e-11
 
 
-def solve_fixed_point(g: Callable[[Array], Array], x0: Array, max_iterations: int = MAX_ITERATIONS):
-    """Iterate ``x <- g(x)`` to round-off for a batch of unknowns.
+@numba.njit(cache=True)
+def fixed_point_status(new, old, smallest):
+    """The stopping rule of every fixed-point iteration here, per component.
 
-    ``x0`` has shape ``(..., k)``: the leading axes index independent problems
-    (trajectories of an ensemble), the last axis the unknowns of one problem.
-    A problem is finished when no component of its increment ``|x_new - x|``
-    fell below that component's smallest earlier increment (the iteration has
-    reached round-off, where increments only fluctuate) and the increment is
-    tiny. This per-component rule avoids stopping early on a small max-norm
-    that is not yet the fixed point, and avoids a fixed tolerance.
-
-    Returns
-    -------
-    x : array, shape like ``x0``
-    iterations : int
-        Evaluations of ``g`` made.
-    converged : bool
+    ``new`` and ``old`` are successive iterates and ``smallest`` holds each
+    component's smallest increment so far (updated in place). Returns ``1``
+    when the iteration has reached round-off: no component's increment fell
+    below its smallest earlier one (increments only fluctuate now) and all are
+    tiny. Returns ``0`` to continue and ``-1`` if an iterate is not finite.
+    Unlike a tolerance on the max-norm, this cannot stop on a small but
+    still-shrinking increment, and needs no tolerance tuned to the problem.
     """
-    x = x0
-    smallest = np.full(x0.shape, np.inf)
-    done = np.zeros(x0.shape[:-1], dtype=bool)
-    for iteration in range(1, max_iterations + 1):
-        x_new = g(x)
-        delta = np.abs(x_new - x)
-        x = x_new
-        if not np.all(np.isfinite(x)):
-            return x, iteration, False
-        stalled = ~np.any(delta < smallest, axis=-1)
-        small = np.all(delta <= ROUNDOFF_TOLERANCE * (1.0 + np.abs(x)), axis=-1)
-        done |= stalled & small
-        if np.all(done):
-            return x, iteration, True
-        smallest = np.minimum(smallest, delta)
-    return x, max_iterations, False
+    new_flat, old_flat, smallest_flat = new.ravel(), old.ravel(), smallest.ravel()
+    stalled, small = True, True
+    for i in range(new_flat.size):
+        x = new_flat[i]
+        if not math.isfinite(x):
+            return -1
+        delta = abs(x - old_flat[i])
+        if delta < smallest_flat[i]:
+            stalled = False
+            smallest_flat[i] = delta
+        if delta > ROUNDOFF_TOLERANCE * (1.0 + abs(x)):
+            small = False
+    return 1 if (stalled and small) else 0
 
 
-# --------------------------------------------------------------------------- methods
+# --------------------------------------------------------------------------- explicit methods
+@numba.njit(cache=True)
+def explicit_rk(hamilton, q, p, h, params, a, b):
+    """One step of the explicit Runge-Kutta method ``(a, b)`` for Hamilton's equations.
+
+    Stage ``i`` evaluates the field at ``y + h sum_{j<i} a_ij k_j``; the step
+    is ``y + h sum_i b_i k_i``. Written with element loops: small temporary
+    arrays would cost more than the arithmetic.
+    """
+    stages, n = b.size, q.size
+    kq, kp = np.zeros((stages, n)), np.zeros((stages, n))
+    qi, pi = np.empty(n), np.empty(n)
+    for i in range(stages):
+        for m in range(n):
+            qi[m], pi[m] = q[m], p[m]
+            for j in range(i):
+                qi[m] += h * a[i, j] * kq[j, m]
+                pi[m] += h * a[i, j] * kp[j, m]
+        hamilton(qi, pi, params, kq[i], kp[i])
+    q1, p1 = q.copy(), p.copy()
+    for i in range(stages):
+        for m in range(n):
+            q1[m] += h * b[i] * kq[i, m]
+            p1[m] += h * b[i] * kp[i, m]
+    return q1, p1
+
+
+@jit_step
+def explicit_euler_step(hamilton, acceleration, q, p, h, params, separable):
+    """``y1 = y + h f(y)``."""
+    q1, p1 = explicit_rk(hamilton, q, p, h, params, _EULER_A, _EULER_B)
+    return q1, p1, 0, 1
+
+
+@jit_step
+def rk4_step(hamilton, acceleration, q, p, h, params, separable):
+    """Classical RK4: four stages, weights 1/6, 1/3, 1/3, 1/6."""
+    q1, p1 = explicit_rk(hamilton, q, p, h, params, _RK4_A, _RK4_B)
+    return q1, p1, 0, 4
+
+
+# --------------------------------------------------------------------------- symplectic methods
+@jit_step
+def semi_implicit_euler_step(hamilton, acceleration, q, p, h, params, separable):
+    """Symplectic Euler for a general ``H(q, p)``:
+
+    ``p1 = p - h H_q(q, p1)``   (implicit in ``p1`` only)
+    ``q1 = q + h H_p(q, p1)``
+    """
+    dq, dp = np.empty_like(q), np.empty_like(p)
+    hamilton(q, p, params, dq, dp)
+    p1 = p + h * dp  # exact when H is separable, else the first guess
+    calls, sweeps = 1, 0
+    if not separable:
+        smallest, status = np.full(p.size, np.inf), 0
+        while status == 0 and sweeps < MAX_SWEEPS:
+            sweeps += 1
+            hamilton(q, p1, params, dq, dp)
+            p_new = p + h * dp
+            status = fixed_point_status(p_new, p1, smallest)
+            p1 = p_new
+        calls += sweeps
+        if status != 1:
+            return q, p, -1, calls
+    hamilton(q, p1, params, dq, dp)
+    return q + h * dq, p1, sweeps, calls + 1
+
+
+@jit_step
+def leapfrog_step(hamilton, acceleration, q, p, h, params, separable):
+    """Stormer-Verlet for a general ``H(q, p)`` (the Lobatto IIIA-IIIB pair):
+
+    ``p_half = p - h/2 H_q(q, p_half)``                 (implicit)
+    ``q1 = q + h/2 [H_p(q, p_half) + H_p(q1, p_half)]``  (implicit)
+    ``p1 = p_half - h/2 H_q(q1, p_half)``                (explicit)
+    """
+    dq, dp = np.empty_like(q), np.empty_like(p)
+    hamilton(q, p, params, dq, dp)
+    p_half = p + 0.5 * h * dp
+    calls, sweeps = 1, 0
+    if not separable:
+        smallest, status = np.full(p.size, np.inf), 0
+        while status == 0 and sweeps < MAX_SWEEPS:
+            sweeps += 1
+            hamilton(q, p_half, params, dq, dp)
+            p_new = p + 0.5 * h * dp
+            status = fixed_point_status(p_new, p_half, smallest)
+            p_half = p_new
+        calls += sweeps
+        if status != 1:
+            return q, p, -1, calls
+    hamilton(q, p_half, params, dq, dp)
+    drift = q + 0.5 * h * dq
+    q1 = q + h * dq  # exact when H is separable, else the first guess
+    calls += 1
+    if not separable:
+        smallest, status, first_sweeps = np.full(q.size, np.inf), 0, sweeps
+        while status == 0 and sweeps - first_sweeps < MAX_SWEEPS:
+            sweeps += 1
+            hamilton(q1, p_half, params, dq, dp)
+            q_new = drift + 0.5 * h * dq
+            status = fixed_point_status(q_new, q1, smallest)
+            q1 = q_new
+        calls += sweeps - first_sweeps
+        if status != 1:
+            return q, p, -1, calls
+    hamilton(q1, p_half, params, dq, dp)
+    return q1, p_half + 0.5 * h * dp, sweeps, calls + 1
+
+
+@jit_step
+def glrk4_step(hamilton, acceleration, q, p, h, params, separable):
+    """Two-stage Gauss-Legendre collocation: ``K_i = f(y + h sum_j a_ij K_j)``,
+    ``y1 = y + h sum_i b_i K_i``, the stages found by fixed-point iteration
+    from the guess ``K_i = f(y)``.
+    """
+    n = q.size
+    kq, kp = np.empty((2, n)), np.empty((2, n))
+    hamilton(q, p, params, kq[0], kp[0])
+    kq[1], kp[1] = kq[0], kp[0]
+    new_q, new_p = np.empty((2, n)), np.empty((2, n))
+    stage_q, stage_p = np.empty(n), np.empty(n)
+    smallest_q, smallest_p = np.full((2, n), np.inf), np.full((2, n), np.inf)
+    sweeps, status = 0, 0
+    while status == 0 and sweeps < MAX_SWEEPS:
+        sweeps += 1
+        for i in range(2):
+            for m in range(n):
+                stage_q[m] = q[m] + h * (_GAUSS_A[i, 0] * kq[0, m] + _GAUSS_A[i, 1] * kq[1, m])
+                stage_p[m] = p[m] + h * (_GAUSS_A[i, 0] * kp[0, m] + _GAUSS_A[i, 1] * kp[1, m])
+            hamilton(stage_q, stage_p, params, new_q[i], new_p[i])
+        status_q = fixed_point_status(new_q, kq, smallest_q)
+        status_p = fixed_point_status(new_p, kp, smallest_p)
+        # converged when both halves are; -1 (not finite) wins over everything
+        status = -1 if min(status_q, status_p) < 0 else status_q * status_p
+        kq[:], kp[:] = new_q, new_p
+    calls = 1 + 2 * sweeps
+    if status != 1:
+        return q, p, -1, calls
+    q1 = q + h * (_GAUSS_B[0] * kq[0] + _GAUSS_B[1] * kq[1])
+    p1 = p + h * (_GAUSS_B[0] * kp[0] + _GAUSS_B[1] * kp[1])
+    return q1, p1, sweeps, calls
+
+
+# --------------------------------------------------------------------------- the report's methods
+@jit_step
+def semi_implicit_euler_velocity_step(hamilton, acceleration, q, v, h, params, separable):
+    """The course report's version on ``(q, v)``: ``v1 = v + h a(q, v)``; ``q1 = q + h v1``."""
+    a = np.empty_like(v)
+    acceleration(q, v, params, a)
+    v1 = v + h * a
+    return q + h * v1, v1, 0, 1
+
+
+@jit_step
+def leapfrog_velocity_step(hamilton, acceleration, q, v, h, params, separable):
+    """The course report's leapfrog on ``(q, v)``, written as kick-drift-kick:
+
+    ``v_half = v + h/2 a(q, v)``; ``q1 = q + h v_half``; ``v1 = v_half + h/2 a(q1, v_half)``.
+    Second order only when ``a`` does not depend on ``v``.
+    """
+    a = np.empty_like(v)
+    acceleration(q, v, params, a)
+    v_half = v + 0.5 * h * a
+    q1 = q + h * v_half
+    acceleration(q1, v_half, params, a)
+    return q1, v_half + 0.5 * h * a, 0, 2
+
+
+# --------------------------------------------------------------------------- the time loop
+MATRIX = types.float64[:, ::1]
+RUN = types.void(
+    types.FunctionType(STEP), HamiltonFn, AccelerationFn, types.boolean, MATRIX, MATRIX,
+    types.float64, types.int64, types.int64, types.int64, VECTOR, types.float64[:, :, ::1],
+    types.float64[:, :, ::1], types.int64[:, ::1],
+)
+#: Codes in ``stats[:, STATUS]`` after :func:`run`.
+RUNNING, NOT_FINITE, NOT_CONVERGED = 0, 1, 2
+STEPS, SWEEPS, CALLS, STATUS = 0, 1, 2, 3
+
+
+@numba.njit(RUN, cache=True, nogil=True)
+def run(step, hamilton, acceleration, separable, q, p, h, n_steps, first_step, save_every,
+        params, saved_q, saved_p, stats):
+    """Advance every row of ``(q, p)`` (shape ``(K, n)``) by ``n_steps`` steps, in place.
+
+    Steps are numbered globally from ``first_step + 1`` so that a long run can
+    be made of several calls (for a progress bar); step ``s`` of row ``k`` is
+    stored in ``saved_q[k, s // save_every]`` when ``save_every`` divides it. ``stats[k]``
+    accumulates (steps done, solver sweeps, vector-field calls, status); a
+    row stops at a non-finite state or a solver failure, keeping its status.
+    Rows are independent; the caller may run slices of them in parallel
+    threads (the kernel releases the GIL).
+    """
+    for k in range(q.shape[0]):
+        if stats[k, STATUS] != RUNNING:
+            continue
+        qk, pk = q[k].copy(), p[k].copy()
+        for s in range(first_step + 1, first_step + n_steps + 1):
+            q1, p1, sweeps, calls = step(hamilton, acceleration, qk, pk, h, params, separable)
+            stats[k, CALLS] += calls
+            if sweeps < 0:
+                stats[k, STATUS] = NOT_CONVERGED
+                break
+            qk, pk = q1, p1
+            if not (np.all(np.isfinite(qk)) and np.all(np.isfinite(pk))):
+                stats[k, STATUS] = NOT_FINITE
+                break
+            stats[k, STEPS] = s
+            stats[k, SWEEPS] += sweeps
+            if s % save_every == 0:
+                saved_q[k, s // save_every] = qk
+                saved_p[k, s // save_every] = pk
+        q[k], p[k] = qk, pk
+
+
+# --------------------------------------------------------------------------- registry
 @dataclass(frozen=True)
 class Method:
-    """An integrator: its properties and its one-step map.
+    """An integrator: its properties and its compiled one-step map.
 
     Attributes
     ----------
@@ -194,8 +406,7 @@ class Method:
         ``(q, p)`` or, for the course report's versions, ``(q, v)``.
     summary : str
         One line for tables and dropdowns.
-    step : callable ``(field, x, y, h) -> (x1, y1, iterations)``
-        ``iterations`` counts the implicit solver's sweeps (0 if explicit).
+    kernel : compiled step function (see the module docstring)
     """
 
     name: str
@@ -204,116 +415,32 @@ class Method:
     implicit: bool
     variables: str
     summary: str
-    step: Callable = field(repr=False)
+    kernel: object = field(repr=False)
 
     def __str__(self) -> str:
         return self.name
-
-
-def _explicit_euler(fld: HamiltonianField, q, p, h):
-    y = explicit_rk_step(EULER_TABLEAU, fld.rhs, np.concatenate([q, p], -1), h)
-    return (*np.split(y, 2, axis=-1), 0)
-
-
-def _rk4(fld: HamiltonianField, q, p, h):
-    y = explicit_rk_step(RK4_TABLEAU, fld.rhs, np.concatenate([q, p], -1), h)
-    return (*np.split(y, 2, axis=-1), 0)
-
-
-def _implicit(g, x0, what):
-    x, iterations, converged = solve_fixed_point(g, x0)
-    if not converged:
-        raise ConvergenceError(
-            f"the implicit equations for {what} did not converge in {iterations} "
-            "fixed-point iterations; use a smaller dt"
-        )
-    return x, iterations
-
-
-def _gauss_legendre(fld: HamiltonianField, q, p, h):
-    """Two-stage Gauss collocation: ``K = f(y + h A K)``, ``y1 = y + h b.K``."""
-    tab = GAUSS4_TABLEAU
-    y = np.concatenate([q, p], -1)
-    f0 = fld.rhs(y)
-    dim = y.shape[-1]
-
-    def stages(k_flat):
-        k = k_flat.reshape(*y.shape[:-1], tab.stages, dim)
-        stage_states = y[..., None, :] + h * np.einsum("ij,...jk->...ik", tab.a, k)
-        return fld.rhs(stage_states).reshape(k_flat.shape)
-
-    k0 = np.repeat(f0[..., None, :], tab.stages, axis=-2).reshape(*y.shape[:-1], -1)
-    k_flat, iterations = _implicit(stages, k0, "the Gauss-Legendre stages")
-    k = k_flat.reshape(*y.shape[:-1], tab.stages, dim)
-    y1 = y + h * np.einsum("i,...ik->...k", tab.b, k)
-    return (*np.split(y1, 2, axis=-1), iterations)
-
-
-def _symplectic_euler(fld: HamiltonianField, q, p, h):
-    """``p1 = p - h H_q(q, p1)``; ``q1 = q + h H_p(q, p1)`` (implicit in ``p1`` only)."""
-    if fld.separable:
-        p1, iterations = p - h * fld.dH_dq(q, p), 0
-    else:
-        p1, iterations = _implicit(lambda x: p - h * fld.dH_dq(q, x), p, "p_{n+1}")
-    return q + h * fld.dH_dp(q, p1), p1, iterations
-
-
-def _stormer_verlet(fld: HamiltonianField, q, p, h):
-    """Generalized Stormer-Verlet (Lobatto IIIA-IIIB pair) for a general ``H(q, p)``.
-
-    ``p_half = p - h/2 H_q(q, p_half)``                 (implicit)
-    ``q1 = q + h/2 [H_p(q, p_half) + H_p(q1, p_half)]``  (implicit)
-    ``p1 = p_half - h/2 H_q(q1, p_half)``                (explicit)
-    """
-    if fld.separable:
-        p_half = p - 0.5 * h * fld.dH_dq(q, p)
-        q1 = q + h * fld.dH_dp(q, p_half)
-        return q1, p_half - 0.5 * h * fld.dH_dq(q1, p_half), 0
-    p_half, it1 = _implicit(lambda x: p - 0.5 * h * fld.dH_dq(q, x), p, "p_{n+1/2}")
-    drift = q + 0.5 * h * fld.dH_dp(q, p_half)
-    q1, it2 = _implicit(lambda x: drift + 0.5 * h * fld.dH_dp(x, p_half), q, "q_{n+1}")
-    return q1, p_half - 0.5 * h * fld.dH_dq(q1, p_half), it1 + it2
-
-
-def _symplectic_euler_velocity(fld: HamiltonianField, q, v, h):
-    """The course report's version on ``(q, v)``: ``v1 = v + h a(q, v)``; ``q1 = q + h v1``."""
-    v1 = v + h * fld.acceleration(q, v)
-    return q + h * v1, v1, 0
-
-
-def _leapfrog_velocity(fld: HamiltonianField, q, v, h):
-    """The course report's leapfrog on ``(q, v)``, written as kick-drift-kick.
-
-    ``v_half = v + h/2 a(q, v)``; ``q1 = q + h v_half``; ``v1 = v_half + h/2 a(q1, v_half)``.
-    Second order only when ``a`` does not depend on ``v``.
-    """
-    v_half = v + 0.5 * h * fld.acceleration(q, v)
-    q1 = q + h * v_half
-    return q1, v_half + 0.5 * h * fld.acceleration(q1, v_half), 0
 
 
 METHODS: dict[str, Method] = {
     m.name: m
     for m in [
         Method("explicit_euler", 1, False, False, "canonical",
-               "explicit Euler: y1 = y + h f(y)", _explicit_euler),
+               "explicit Euler: y1 = y + h f(y)", explicit_euler_step),
         Method("semi_implicit_euler", 1, True, True, "canonical",
                "symplectic Euler in (theta, p): implicit in p1 unless H is separable",
-               _symplectic_euler),
+               semi_implicit_euler_step),
         Method("leapfrog", 2, True, True, "canonical",
-               "Stormer-Verlet in (theta, p): the generalized, implicit form",
-               _stormer_verlet),
+               "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step),
         Method("rk4", 4, False, False, "canonical",
-               "classical fourth-order Runge-Kutta", _rk4),
+               "classical fourth-order Runge-Kutta", rk4_step),
         Method("glrk4", 4, True, True, "canonical",
-               "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)",
-               _gauss_legendre),
+               "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)", glrk4_step),
         Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
                "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
-               _symplectic_euler_velocity),
+               semi_implicit_euler_velocity_step),
         Method("leapfrog_velocity", 2, False, False, "velocity",
                "the report's leapfrog on (theta, omega): not symplectic for n >= 2",
-               _leapfrog_velocity),
+               leapfrog_velocity_step),
     ]
 }
 

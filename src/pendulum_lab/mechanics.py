@@ -181,8 +181,14 @@ class Chain:
 
     @functools.cached_property
     def inverse_mass_matrix(self) -> sp.Matrix:
-        """``M(q)^-1``, by cofactors; only requested for display and checks."""
+        """``M(q)^-1``, by cofactors; only requested for display and checks.
+
+        Simplified for ``n <= 2`` only: beyond, simplification costs minutes
+        and the numeric code never needs this matrix.
+        """
         inv = self.mass_matrix.adjugate() / self.mass_matrix.det()
+        if self.n > 2:
+            return inv
         return inv.applyfunc(lambda e: sp.factor(sp.trigsimp(e)))
 
     @functools.cached_property

@@ -2,21 +2,43 @@
 
 from __future__ import annotations
 
+import functools
+import os
 import time
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import _validation as check
-from .integrators import ConvergenceError, HamiltonianField, Method, get_method
+from . import codegen
+from .integrators import (
+    CALLS,
+    MAX_SWEEPS,
+    NOT_CONVERGED,
+    NOT_FINITE,
+    RUNNING,
+    STATUS,
+    STEPS,
+    SWEEPS,
+    ConvergenceError,
+    HamiltonianField,
+    Method,
+    get_method,
+    run,
+)
 from .model import PendulumModel
 
 __all__ = ["Trajectory", "hamiltonian_field", "simulate", "step"]
 
 # Show a progress bar by default once a run does this many state updates
-# (steps times ensemble size): about two seconds of work or more.
-PROGRESS_THRESHOLD = 200_000
+# (steps times ensemble size): a few seconds of work or more.
+PROGRESS_THRESHOLD = 2_000_000
+# State updates per call of the compiled loop (a fraction of a second).
+CHUNK_WORK = 200_000
+# Ensembles at least this large are split across threads.
+PARALLEL_MIN_MEMBERS = 64
 
 
 @dataclass(frozen=True)
@@ -35,12 +57,13 @@ class Trajectory:
     mean_iterations : float
         Mean implicit-solver sweeps per step (0 for explicit methods).
     evaluations : int
-        Calls of the vector-field functions (``dH/dq``, ``dH/dp`` or the
-        acceleration), each on the whole ensemble.
+        Vector-field evaluations (Hamilton's equations or the acceleration at
+        one state), summed over the ensemble.
     wall_time : float
         Seconds spent stepping.
     completed : bool
-        False if the run stopped early at a non-finite state.
+        False if some trajectory reached a non-finite state (it then stops
+        there; in an ensemble its later entries are NaN).
     """
 
     t: np.ndarray
@@ -69,20 +92,16 @@ class Trajectory:
         return self.energy_error / scale
 
 
-class _Counter:
-    """Wraps a function and counts its calls (for work-precision diagrams)."""
-
-    def __init__(self, fn):
-        self.fn, self.calls = fn, 0
-
-    def __call__(self, *args):
-        self.calls += 1
-        return self.fn(*args)
+@functools.lru_cache(maxsize=64)
+def _field(n: int, params: tuple, separable: bool) -> HamiltonianField:
+    kernels = codegen.load_kernels(n)
+    return HamiltonianField(kernels.hamilton, kernels.acceleration,
+                            np.array(params, dtype=float), separable)
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
-    """The model's Hamiltonian vector field, as the integrators expect it."""
-    return HamiltonianField(model.dH_dq, model.dH_dp, model.accelerations, model.separable)
+    """The model's compiled Hamiltonian vector field, as the integrators expect it."""
+    return _field(model.n, (*model.masses, *model.lengths, model.g), model.separable)
 
 
 def _check_model(model):
@@ -93,11 +112,39 @@ def _check_model(model):
         )
 
 
+def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_step,
+             save_every, saved_q, saved_p, stats):
+    """Run the compiled time loop on rows ``q, p`` of shape ``(K, n)``, in place.
+
+    Large ensembles are split into one slice per core; the compiled loop
+    releases the GIL, so the slices run in parallel threads.
+    """
+    def advance(rows):
+        run(method.kernel, field.hamilton, field.acceleration, field.separable, q[rows],
+            p[rows], float(h), n_steps, first_step, save_every, field.params, saved_q[rows],
+            saved_p[rows], stats[rows])
+
+    members, workers = q.shape[0], os.cpu_count() or 1
+    if members < PARALLEL_MIN_MEMBERS or workers == 1:
+        advance(slice(None))
+        return
+    bounds = np.linspace(0, members, workers + 1).astype(int)
+    with ThreadPoolExecutor(workers) as pool:
+        list(pool.map(advance, [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]))
+
+
 def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """One step of ``method`` in canonical variables ``(theta, p)``.
 
-    The velocity-variable methods are converted ``p -> omega`` before and back
-    after their step, so all methods can be compared as maps of ``(theta, p)``.
+    ``q0`` and ``p0`` have shape ``(n,)`` or ``(..., n)``. The velocity-variable
+    methods are converted ``p -> omega`` before and back after their step, so
+    all methods can be compared as maps of ``(theta, p)``. A negative ``dt``
+    steps backwards.
+
+    Raises
+    ------
+    ConvergenceError
+        If an implicit method's equations do not converge.
 
     Examples
     --------
@@ -110,15 +157,26 @@ def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, n
     method = get_method(method)
     q0 = check.state_array("q0", q0, model.n)
     p0 = check.state_array("p0", p0, model.n)
+    if q0.shape != p0.shape:
+        raise ValueError(f"`q0` and `p0` must have the same shape, got {q0.shape} and {p0.shape}")
     dt = check.real_number("dt", dt)
     if dt == 0:
-        raise ValueError("`dt` must be non-zero (negative dt steps backwards in time)")
-    field = hamiltonian_field(model)
+        raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
+    shape = q0.shape
+    # Copies: the compiled loop updates its arguments in place.
+    q = q0.reshape(-1, model.n).copy()
+    y = p0.reshape(-1, model.n).copy()
     if method.variables == "velocity":
-        q1, v1, _ = method.step(field, q0, model.velocities(q0, p0), dt)
-        return q1, model.momenta(q1, v1)
-    q1, p1, _ = method.step(field, q0, p0, dt)
-    return q1, p1
+        y = np.ascontiguousarray(model.velocities(q, y))
+    unused = np.empty((q.shape[0], 1, model.n))
+    stats = np.zeros((q.shape[0], 4), dtype=np.int64)
+    _advance(method, hamiltonian_field(model), q, y, dt, 1, 0, 2, unused, unused, stats)
+    if np.any(stats[:, STATUS] == NOT_CONVERGED):
+        raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
+                               f"in {MAX_SWEEPS} fixed-point sweeps (dt = {dt:g})")
+    if method.variables == "velocity":
+        y = model.momenta(q, y)
+    return q.reshape(shape), y.reshape(shape)
 
 
 def _progress_bar(total: int, enabled: bool | None, work: int, label: str):
@@ -173,9 +231,11 @@ def simulate(
 
     Notes
     -----
-    Explicit methods can blow up (explicit Euler with a large ``dt``): the run
-    then stops at the first non-finite state with a ``RuntimeWarning`` and
-    returns what it computed, with ``completed=False``.
+    Explicit methods can blow up (explicit Euler with a large ``dt``): a single
+    trajectory then stops at the first non-finite state with a
+    ``RuntimeWarning`` and returns what it computed, with ``completed=False``;
+    in an ensemble the other members go on and the blown-up one holds NaN.
+    Ensemble members are integrated in parallel threads.
 
     Examples
     --------
@@ -201,53 +261,71 @@ def simulate(
     n_steps = int(np.floor(t_end / dt * (1 + 1e-12)))
     n_saved = n_steps // save_every + 1
     canonical = method.variables == "canonical"
-    x = theta0.copy()
-    y = model.momenta(theta0, omega0) if canonical else omega0.copy()
-    xs = np.empty((n_saved, *x.shape))
-    ys = np.empty((n_saved, *x.shape))
-    xs[0], ys[0] = x, y
+    batch_shape = theta0.shape[:-1]
+    # Copies: the compiled loop updates its arguments in place.
+    q = theta0.reshape(-1, model.n).copy()
+    y = model.momenta(q, omega0.reshape(-1, model.n)) if canonical else omega0.reshape(-1, model.n)
+    y = np.array(y, order="C")
+    members = q.shape[0]
+    saved_q = np.full((members, n_saved, model.n), np.nan)
+    saved_y = np.full((members, n_saved, model.n), np.nan)
+    saved_q[:, 0], saved_y[:, 0] = q, y
+    stats = np.zeros((members, 4), dtype=np.int64)
+    field = hamiltonian_field(model)
 
-    counters = [_Counter(f) for f in (model.dH_dq, model.dH_dp, model.accelerations)]
-    field = HamiltonianField(*counters, separable=model.separable)
-    bar = _progress_bar(n_steps, progress, n_steps * max(1, x.size // model.n), method.name)
-    iterations, taken, completed = 0, 0, True
+    # The compiled loop runs in chunks only so that a progress bar can move.
+    chunk = max(1, min(n_steps, CHUNK_WORK // members))
+    bar = _progress_bar(n_steps, progress, n_steps * members, method.name)
     start = time.perf_counter()
     try:
-        for k in range(1, n_steps + 1):
-            try:
-                x_new, y_new, sweeps = method.step(field, x, y, dt)
-            except ConvergenceError as err:
-                raise ConvergenceError(
-                    f"{method.name}: {err} (step {k}, t = {k * dt:.6g}, dt = {dt:g})"
-                ) from None
-            if not (np.all(np.isfinite(x_new)) and np.all(np.isfinite(y_new))):
-                completed = False
-                warnings.warn(
-                    f"{method.name}: the state became non-finite at step {k} "
-                    f"(t = {k * dt:.6g}); the trajectory stops there. Try a smaller dt.",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
-                break
-            x, y, taken = x_new, y_new, k
-            iterations += sweeps
-            if k % save_every == 0:
-                xs[k // save_every], ys[k // save_every] = x, y
+        for first in range(0, n_steps, chunk):
+            todo = min(chunk, n_steps - first)
+            _advance(method, field, q, y, dt, todo, first, save_every, saved_q, saved_y, stats)
             if bar is not None:
-                bar.update(1)
+                bar.update(todo)
+            if np.all(stats[:, STATUS] != RUNNING):
+                break
     finally:
         if bar is not None:
             bar.close()
     wall = time.perf_counter() - start
 
-    kept = taken // save_every + 1
-    theta = xs[:kept]
+    failed = np.flatnonzero(stats[:, STATUS] == NOT_CONVERGED)
+    if failed.size:
+        k = failed[np.argmin(stats[failed, STEPS])]
+        at = int(stats[k, STEPS]) + 1
+        member = f", ensemble member {np.unravel_index(k, batch_shape)}" if batch_shape else ""
+        raise ConvergenceError(
+            f"{method.name}: the implicit equations did not converge in {MAX_SWEEPS} fixed-point "
+            f"sweeps at step {at} (t = {at * dt:.6g}, dt = {dt:g}{member}); use a smaller dt"
+        )
+    blown = stats[:, STATUS] == NOT_FINITE
+    completed = not np.any(blown)
+    kept = n_saved
+    if not completed:
+        first_bad = int(np.min(stats[blown, STEPS])) + 1
+        warnings.warn(
+            f"{method.name}: the state became non-finite at step {first_bad} "
+            f"(t = {first_bad * dt:.6g}) in {int(blown.sum())} of {members} trajectories; "
+            + ("the trajectory stops there. " if not batch_shape
+               else "those trajectories hold NaN from there on. ")
+            + "Try a smaller dt.",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        if not batch_shape:
+            kept = int(stats[0, STEPS]) // save_every + 1
+
+    out_shape = (kept, *batch_shape, model.n)
+    theta = np.ascontiguousarray(saved_q[:, :kept].swapaxes(0, 1)).reshape(out_shape)
+    saved = np.ascontiguousarray(saved_y[:, :kept].swapaxes(0, 1)).reshape(out_shape)
     if canonical:
-        p, omega = ys[:kept], model.velocities(theta, ys[:kept])
+        p, omega = saved, model.velocities(theta, saved)
     else:
-        omega, p = ys[:kept], model.momenta(theta, ys[:kept])
-    kinetic = model.kinetic_energy(theta, omega)
-    potential = model.potential_energy(theta)
+        omega, p = saved, model.momenta(theta, saved)
+    with np.errstate(over="ignore", invalid="ignore"):  # states just before a blow-up
+        kinetic = model.kinetic_energy(theta, omega)
+        potential = model.potential_energy(theta)
     return Trajectory(
         t=np.arange(kept) * (save_every * dt),
         theta=theta,
@@ -258,8 +336,8 @@ def simulate(
         energy=kinetic + potential,
         method=method,
         dt=dt,
-        mean_iterations=iterations / max(taken, 1),
-        evaluations=sum(c.calls for c in counters),
+        mean_iterations=float(stats[:, SWEEPS].sum() / max(stats[:, STEPS].sum(), 1)),
+        evaluations=int(stats[:, CALLS].sum()),
         wall_time=wall,
         completed=completed,
     )
