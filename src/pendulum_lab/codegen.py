@@ -94,22 +94,50 @@ def _assignments(targets: list[str], exprs: list[sp.Expr], mapping: dict, prefix
     return lines
 
 
+def _solve_lines(chain: Chain, mapping: dict, rhs: list[str], rhs_array: str, out: str,
+                 prefix: str) -> list[str]:
+    """Lines that solve ``M(q) out = rhs``.
+
+    ``rhs`` names the right-hand side's entries, ``rhs_array`` the array that
+    holds them. For one or two links the closed form needs no array at all
+    (this is the hot path of the course); longer chains fill ``mass`` and call
+    :func:`solve_spd`.
+    """
+    n = chain.n
+    mass = list(chain.mass_matrix)
+    if n == 1:
+        (m00,) = _assignments(["m00"], mass, mapping, prefix)
+        return [m00, f"{out}[0] = {rhs[0]} / m00"]
+    if n == 2:
+        lines = _assignments(["m00", "m01", "m11"], [mass[0], mass[1], mass[3]], mapping, prefix)
+        return lines + [
+            "det = m00 * m11 - m01 * m01",
+            f"{out}[0] = (m11 * {rhs[0]} - m01 * {rhs[1]}) / det",
+            f"{out}[1] = (m00 * {rhs[1]} - m01 * {rhs[0]}) / det",
+        ]
+    lines = [f"mass = np.empty(({n}, {n}))"]
+    lines += _assignments([f"mass[{i}, {j}]" for i in range(n) for j in range(n)], mass,
+                          mapping, prefix)
+    return lines + [f"solve_spd(mass, {rhs_array}, {out})"]
+
+
 def kernel_source(chain: Chain) -> str:
     """The Python source of the two Numba kernels for ``chain``."""
     n = chain.n
-    th, w, pars, mapping = _plain_symbols(chain)
+    _, _, _, mapping = _plain_symbols(chain)
     unpack = [f"th{i} = q[{i}]" for i in range(n)]
     unpack += [f"par{i} = params[{i}]" for i in range(2 * n + 1)]
-    mass_targets = [f"mass[{i}, {j}]" for i in range(n) for j in range(n)]
-    mass_lines = [f"mass = np.empty(({n}, {n}))"]
-    mass_lines += _assignments(mass_targets, list(chain.mass_matrix), mapping, "a")
-    velocities = [f"w{i} = dq[{i}]" for i in range(n)]
-    force_lines = _assignments([f"dp[{i}]" for i in range(n)], list(chain.dlagrangian_dq),
-                               mapping, "b")
-    accel_unpack = [f"w{i} = v[{i}]" for i in range(n)]
-    forcing_lines = [f"rhs = np.empty({n})"]
-    forcing_lines += _assignments([f"rhs[{i}]" for i in range(n)], list(chain.forcing),
-                                  mapping, "c")
+    hamilton = list(unpack)
+    hamilton += _solve_lines(chain, mapping, [f"p[{i}]" for i in range(n)], "p", "dq", "a")
+    hamilton += [f"w{i} = dq[{i}]" for i in range(n)]
+    hamilton += _assignments([f"dp[{i}]" for i in range(n)], list(chain.dlagrangian_dq),
+                             mapping, "b")
+    accel = unpack + [f"w{i} = v[{i}]" for i in range(n)]
+    forcing = [f"f{i}" for i in range(n)] if n <= 2 else [f"rhs[{i}]" for i in range(n)]
+    if n > 2:
+        accel += [f"rhs = np.empty({n})"]
+    accel += _assignments(forcing, list(chain.forcing), mapping, "c")
+    accel += _solve_lines(chain, mapping, forcing, "rhs", "out", "a")
 
     def body(lines):
         return "\n".join("    " + line for line in lines)
@@ -130,21 +158,13 @@ from pendulum_lab.codegen import solve_spd
 @numba.njit(HAMILTON, cache=True)
 def hamilton(q, p, params, dq, dp):
     """dq = M(q)^-1 p (= dH/dp); dp = dL/dq at omega = dq (= -dH/dq)."""
-{body(unpack)}
-{body(mass_lines)}
-    solve_spd(mass, p, dq)
-{body(velocities)}
-{body(force_lines)}
+{body(hamilton)}
 
 
 @numba.njit(ACCELERATION, cache=True)
 def acceleration(q, v, params, out):
     """out = M(q)^-1 F(q, v)."""
-{body(unpack)}
-{body(accel_unpack)}
-{body(mass_lines)}
-{body(forcing_lines)}
-    solve_spd(mass, rhs, out)
+{body(accel)}
 '''
 
 
