@@ -1,5 +1,5 @@
 """pytest wiring of the browser tests: the ``browser`` marker, the skip/fail policy, test
-ordering, and the session fixtures (one JupyterLab, one Chromium, one page per notebook).
+ordering, and the session fixture (one JupyterLab, one Chromium, one page per notebook).
 
 The machinery itself lives in ``lab_harness.py``; see ``README.md`` beside this file.
 """
@@ -7,26 +7,7 @@ The machinery itself lives in ``lab_harness.py``; see ``README.md`` beside this 
 from __future__ import annotations
 
 import pytest
-from lab_harness import (
-    CHROMIUM_ARGS,
-    PAGE_HELPERS,
-    VIEWPORT,
-    NotebookRunner,
-    browser_unavailable_reason,
-    chromium_path,
-    in_ci,
-    notebook_dir,
-    skip_or_fail,
-    start_lab,
-)
-
-
-def pytest_configure(config):
-    config.addinivalue_line(
-        "markers",
-        "browser: runs notebooks in JupyterLab in Chromium via Playwright "
-        "(skipped without Chromium/Playwright, failing instead when CI=true)",
-    )
+from lab_harness import NotebookRunner, browser_unavailable_reason, in_ci
 
 
 def pytest_collection_modifyitems(config, items):
@@ -51,46 +32,12 @@ def pytest_collection_modifyitems(config, items):
 
 
 @pytest.fixture(scope="session")
-def jupyterlab(tmp_path_factory):
-    """A JupyterLab server on a temporary copy of the notebooks (one per session)."""
-    reason = browser_unavailable_reason()
-    if reason is not None:
-        skip_or_fail(reason)
-    server = start_lab(tmp_path_factory.mktemp("jupyterlab"), notebook_dir())
-    try:
-        yield server
-    finally:
-        server.stop()
-
-
-@pytest.fixture(scope="session")
-def chromium():
-    """Debian's Chromium driven by Playwright (one per session, never downloaded)."""
-    reason = browser_unavailable_reason()
-    if reason is not None:
-        skip_or_fail(reason)
-    from playwright.sync_api import sync_playwright
-
-    manager = sync_playwright().start()
-    try:
-        browser = manager.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
-        try:
-            yield browser
-        finally:
-            browser.close()
-    finally:
-        manager.stop()
-
-
-@pytest.fixture(scope="session")
-def notebook_runner(jupyterlab, chromium):
-    """Opens each notebook in a new page and runs all its cells once; see NotebookRunner."""
-    context = chromium.new_context(viewport=VIEWPORT, device_scale_factor=1)
-    context.set_default_timeout(30_000)
-    context.add_init_script(PAGE_HELPERS)
-    runner = NotebookRunner(jupyterlab, context)
+def notebook_runner(tmp_path_factory):
+    """One JupyterLab (on a temporary copy of the notebooks) and one Chromium for the session,
+    started by the first test that opens a notebook; one page per notebook. See
+    ``lab_harness.NotebookRunner``."""
+    runner = NotebookRunner(lambda: tmp_path_factory.mktemp("jupyterlab"))
     try:
         yield runner
     finally:
-        runner.close_current()
-        context.close()
+        runner.close()

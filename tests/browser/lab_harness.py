@@ -61,9 +61,8 @@ VIEWPORT = {"width": 1400, "height": 1000}
 MAX_SCREENSHOT_HEIGHT = 16000
 
 # Per-user JupyterLab settings written into the temporary settings folder: render every cell
-# (no windowing, so the DOM holds the whole notebook; no empty space after the last
-# cell), no news or update checks (no network
-# here), no extension manager, no autosave.
+# (no windowing, so the DOM holds the whole notebook), no empty space after the last cell, no
+# news or update checks (no network here), no extension manager, no autosave.
 LAB_SETTINGS = {
     "@jupyterlab/notebook-extension/tracker": {"windowingMode": "none", "scrollPastEnd": False},
     "@jupyterlab/apputils-extension/notification": {
@@ -235,6 +234,8 @@ def start_lab(workdir: Path, notebooks: Path) -> LabServer:
         ("JUPYTER_RUNTIME_DIR", "jupyter-runtime"),
         ("IPYTHONDIR", "ipython"),
         ("MPLCONFIGDIR", "matplotlib"),
+        # jupyter-lsp asks npm for its global prefix at start-up; npm logs into its cache.
+        ("npm_config_cache", "npm-cache"),
     ):
         (workdir / sub).mkdir()
         env[var] = str(workdir / sub)
@@ -312,16 +313,21 @@ window.__plab = {
       statusBar: bar ? bar.innerText.replace(/\s+/g, ' ') : '',
       dialog: !!document.querySelector('.jp-Dialog'),
       busyCount: (this.busy[path] || 0),
+      deaths: (this.deaths[path] || 0),
     };
   },
   busy: {},
+  deaths: {},
+  // Count the kernel's busy phases (to see that an action reached it) and its deaths.
   watch(path) {
     const p = this.panel(path);
     if (!p || p.__plabWatched) return;
     p.__plabWatched = true;
     this.busy[path] = 0;
+    this.deaths[path] = 0;
     p.sessionContext.statusChanged.connect((_, status) => {
-      if (status === 'busy') this.busy[path] = (this.busy[path] || 0) + 1;
+      if (status === 'busy') this.busy[path] += 1;
+      if (['dead', 'restarting', 'autorestarting'].includes(status)) this.deaths[path] += 1;
     });
   },
   visible(el) {
@@ -470,16 +476,67 @@ class NotebookRun:
 
 
 class NotebookRunner:
-    """Opens notebooks one at a time, each in a new page, and runs all their cells once."""
+    """Opens notebooks one at a time, each in a new page, and runs all their cells once.
 
-    def __init__(self, server: LabServer, context):
-        self.server = server
-        self.context = context
+    JupyterLab and Chromium are started on the first ``get`` (inside a test, so that a missing
+    browser under ``CI=true`` is reported as that test's failure) and stopped by ``close``.
+    """
+
+    def __init__(self, make_workdir):
+        self._make_workdir = make_workdir
+        self._start_error: str | None = None
+        self._playwright = None
+        self.browser = None
+        self.server: LabServer | None = None
+        self.context = None
         self.current: NotebookRun | None = None
+
+    def start(self) -> None:
+        reason = browser_unavailable_reason()
+        if reason is not None:
+            skip_or_fail(reason)
+        if self._start_error is not None:
+            pytest.fail(f"browser harness failed to start: {self._start_error}", pytrace=False)
+        if self.context is not None:
+            return
+        try:
+            workdir = self._make_workdir()
+            self.server = start_lab(workdir, notebook_dir())
+            from playwright.sync_api import sync_playwright
+
+            # Chromium's profile is a temporary one of Playwright's; its caches go here too.
+            xdg = workdir / "chromium-xdg"
+            xdg.mkdir()
+            env = dict(os.environ, XDG_CONFIG_HOME=str(xdg), XDG_CACHE_HOME=str(xdg))
+            self._playwright = sync_playwright().start()
+            self.browser = self._playwright.chromium.launch(
+                executable_path=chromium_path(), args=CHROMIUM_ARGS, env=env
+            )
+            self.context = self.browser.new_context(viewport=VIEWPORT, device_scale_factor=1)
+            self.context.set_default_timeout(30_000)
+            self.context.add_init_script(PAGE_HELPERS)
+        except Exception as exc:
+            self._start_error = f"{type(exc).__name__}: {exc}"
+            self.close()
+            raise
+
+    def close(self) -> None:
+        """Stop everything that was started, each step on its own."""
+        self.close_current()
+        for step in (
+            lambda: self.context and self.context.close(),
+            lambda: self.browser and self.browser.close(),
+            lambda: self._playwright and self._playwright.stop(),
+            lambda: self.server and self.server.stop(),
+        ):
+            with contextlib.suppress(Exception):
+                step()
+        self.context = self.browser = self._playwright = self.server = None
 
     def get(self, name: str) -> NotebookRun:
         if self.current is not None and self.current.name == name:
             return self.current
+        self.start()
         self.close_current()
         page = self.context.new_page()
         run = NotebookRun(name=name, page=page)
@@ -501,7 +558,8 @@ class NotebookRunner:
             return
         with contextlib.suppress(Exception):
             self.current.page.close()
-        self.server.shutdown_kernels_of(self.current.name)
+        if self.server is not None:
+            self.server.shutdown_kernels_of(self.current.name)
         self.current = None
 
     # -- steps ------------------------------------------------------------------------------
@@ -525,7 +583,10 @@ class NotebookRunner:
                 if accept.count():
                     accept.first.click()
             busy_ok = min_busy is None or state.get("busyCount", 0) >= min_busy
-            if state.get("status") == "idle" and state.get("ready") and busy_ok:
+            # The kernel's own status, and what the status bar shows a person.
+            bar = state.get("statusBar", "")
+            bar_ok = not bar or "Idle" in bar
+            if state.get("status") == "idle" and state.get("ready") and bar_ok and busy_ok:
                 return state
             if time.monotonic() > deadline:
                 raise TimeoutError(
@@ -575,6 +636,14 @@ class NotebookRunner:
             running = [c for c in code if "*" in c["prompt"]]
             unrun = [c for c in code if c["executionCount"] is None]
             errored = any(c["errors"] for c in code)
+            if state.get("deaths"):
+                run.seconds = time.monotonic() - start
+                run.problems.append(
+                    f"the kernel died or restarted during run-all (state {state['status']}); "
+                    f"cells {[c['index'] for c in unrun]} without execution count"
+                )
+                run.cells = cells
+                return
             if state["status"] == "idle" and not running and (not unrun or errored):
                 run.seconds = time.monotonic() - start
                 break
