@@ -17,7 +17,7 @@ lab: $(BIN)/.installed
 	$(BIN)/pendulum-lab
 
 test: $(BIN)/.installed
-	$(BIN)/ruff check src tests benchmarks notebooks
+	$(BIN)/ruff check .
 	$(BIN)/python -m pytest
 
 bench: $(BIN)/.installed
