@@ -21,6 +21,19 @@ from .simulate import Trajectory, hamiltonian_field, simulate, step
 
 __version__ = "0.1.0"
 
+# Submodules that pull in heavy dependencies (ipywidgets, matplotlib) load on
+# first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
+_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "mechanics", "plotting",
+                    "report", "widgets"}
+
+
+def __getattr__(name):
+    if name in _LAZY_SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 __all__ = [
     "METHODS",
     "Chain",

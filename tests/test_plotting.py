@@ -1,0 +1,221 @@
+"""Figures (Agg, no pyplot) and the analysis they draw: periods, spectra, linearisation."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+import pendulum_lab as pl  # noqa: E402
+from pendulum_lab import analysis, plotting  # noqa: E402
+
+SP = pl.simple_pendulum(mass=1.0, length=1.0, g=9.81)
+DP = pl.double_pendulum()
+
+
+@pytest.fixture(scope="module")
+def dp_traj():
+    return pl.simulate(DP, [1.0, 1.5], [0.0, 0.0], t_end=2.0, dt=0.01)
+
+
+@pytest.fixture(scope="module")
+def rotating():
+    return pl.simulate(SP, [0.0], [8.0], t_end=3.0, dt=0.01)  # above the separatrix speed 6.26
+
+
+# --------------------------------------------------------------------------- plots
+def test_energy_plot_draws_the_trajectory_energies(dp_traj):
+    fig = plotting.plot_energy(dp_traj)
+    assert isinstance(fig, Figure)
+    kinetic, potential, total = fig.axes[0].lines
+    np.testing.assert_array_equal(kinetic.get_ydata(), dp_traj.kinetic)
+    np.testing.assert_array_equal(potential.get_ydata(), dp_traj.potential)
+    np.testing.assert_array_equal(total.get_ydata(), dp_traj.energy)
+    np.testing.assert_array_equal(total.get_xdata(), dp_traj.t)
+
+
+def test_plots_draw_into_a_given_axes(dp_traj):
+    fig, axes = plotting.new_figure(1, 3)
+    assert plotting.plot_angles(dp_traj, ax=axes[0]) is fig
+    assert plotting.plot_energy_error(dp_traj, ax=axes[1]) is fig
+    assert plotting.plot_phase(dp_traj, ax=axes[2]) is fig
+    assert len(axes[0].lines) == 2 and axes[1].get_yscale() == "log"
+    with pytest.raises(TypeError, match="ax"):
+        plotting.plot_angles(dp_traj, ax="left")
+
+
+def test_energy_error_is_relative_by_default(dp_traj):
+    fig = plotting.plot_energy_error(dp_traj)
+    shown = np.array(fig.axes[0].lines[0].get_ydata(), dtype=float)
+    expected = np.abs(dp_traj.relative_energy_error)
+    np.testing.assert_allclose(shown[1:], np.where(expected[1:] > 0, expected[1:], np.nan))
+    absolute = plotting.plot_energy_error(dp_traj, relative=False).axes[0].lines[0].get_ydata()
+    assert not np.allclose(np.asarray(absolute, float)[1:], shown[1:])  # E(0) != +-1 here
+
+
+def test_wrap_angle():
+    np.testing.assert_allclose(
+        plotting.wrap_angle([0.0, np.pi, -np.pi, 3 * np.pi, 4.0]),
+        [0.0, np.pi, np.pi, np.pi, 4.0 - 2 * np.pi],
+    )
+
+
+def test_phase_plot_wraps_and_breaks_rotations(rotating):
+    x = np.asarray(plotting.plot_phase(rotating).axes[0].lines[0].get_xdata(), dtype=float)
+    finite = x[np.isfinite(x)]
+    assert np.all(np.abs(finite) <= np.pi)
+    assert np.isnan(x).sum() >= 2  # about three turns, one break per turn
+    assert np.all(np.abs(np.diff(x)[np.isfinite(np.diff(x))]) < 1.0)
+    # Negative control: a libration is never broken.
+    swing = pl.simulate(SP, [1.0], [0.0], t_end=3.0, dt=0.01)
+    x = np.asarray(plotting.plot_phase(swing).axes[0].lines[0].get_xdata(), dtype=float)
+    assert not np.isnan(x).any()
+
+
+def test_arm_projections_one_panel_per_arm(dp_traj):
+    fig = plotting.plot_arm_projections(dp_traj)
+    assert len(fig.axes) == 2
+    for i, ax in enumerate(fig.axes):
+        np.testing.assert_allclose(ax.lines[0].get_ydata(), dp_traj.omega[:, i])
+    with pytest.raises(ValueError, match="axes"):
+        plotting.plot_arm_projections(dp_traj, axes=[fig.axes[0]])
+
+
+def test_phase_portrait_separatrix_is_the_saddle_level():
+    fig = plotting.plot_phase_portrait(SP)
+    ax = fig.axes[0]
+    red = [
+        c
+        for c in ax.collections
+        if np.allclose(c.get_edgecolor()[0][:3], matplotlib.colors.to_rgb("tab:red"))
+    ]
+    assert len(red) == 1
+    separatrix = red[0]
+    assert list(separatrix.levels) == pytest.approx([SP.masses[0] * SP.g * SP.lengths[0]])
+    points = np.concatenate([p.vertices for p in separatrix.get_paths()])
+    energy = SP.energy(points[:, :1], points[:, 1:])
+    assert np.max(np.abs(energy - SP.g)) < 0.05  # on the grid's contour to its resolution
+    # Negative control: the librations lie strictly below it.
+    blue = [c for c in ax.collections if c is not separatrix and max(c.levels) < SP.g]
+    assert blue
+
+
+def test_phase_portrait_overlays_a_trajectory_and_rejects_chains(rotating):
+    fig = plotting.plot_phase_portrait(SP, trajectory=rotating)
+    traj_line = [ln for ln in fig.axes[0].lines if ln.get_label() == "trajectory"][0]
+    y = np.asarray(traj_line.get_ydata(), dtype=float)
+    np.testing.assert_allclose(y[np.isfinite(y)], rotating.omega[:, 0])
+    with pytest.raises(ValueError, match="simple pendulum"):
+        plotting.plot_phase_portrait(DP)
+
+
+def test_draw_pendulum_puts_bobs_at_the_model_positions():
+    theta = np.array([0.3, -1.2])
+    fig = plotting.draw_pendulum(DP, theta)
+    rods = fig.axes[0].lines[0]
+    x, y = DP.positions(theta)
+    np.testing.assert_allclose(rods.get_xdata(), [0.0, *x])
+    np.testing.assert_allclose(rods.get_ydata(), [0.0, *y])
+    with pytest.raises(ValueError, match="theta"):
+        plotting.draw_pendulum(DP, [0.3])
+
+
+def test_linear_vs_nonlinear_panels(dp_traj):
+    small = pl.simulate(DP, [np.pi + 1e-3, np.pi], [0.0, 0.0], t_end=5.0, dt=0.01)
+    fig = plotting.plot_linear_vs_nonlinear(DP, "up-up", small)
+    linear_ax, nonlinear_ax = fig.axes
+    lin = np.asarray(linear_ax.lines[0].get_ydata(), dtype=float)
+    # The saddle's linear solution grows like exp(5.79 t): cut once it passes pi.
+    assert np.isnan(lin[-1]) and np.isfinite(lin[0])
+    assert np.nanmax(np.abs(lin)) <= np.pi
+    np.testing.assert_allclose(nonlinear_ax.lines[0].get_ydata(), small.theta[:, 0] - np.pi)
+
+
+def test_period_and_spectrum_plots():
+    fig = plotting.plot_period_vs_amplitude(SP, [0.5, 1.0], [2.04, 2.14])
+    assert [ln.get_label() for ln in fig.axes[0].lines][-1] == "measured (simulation)"
+    traj = pl.simulate(DP, [0.02, 0.0], [0.0, 0.0], t_end=20.0, dt=0.02)
+    fig = plotting.plot_spectrum(traj, marks=analysis.normal_mode_frequencies(DP))
+    assert len(fig.axes[0].lines) == 3
+
+
+def test_panels_registry(dp_traj):
+    fig, axes = plotting.new_figure(1, len(plotting.PANELS))
+    sp_traj = pl.simulate(SP, [1.0], [0.0], t_end=1.0, dt=0.01)
+    for ax, (name, panel) in zip(axes, plotting.PANELS.items()):
+        panel(ax, sp_traj, SP)
+        assert ax.has_data(), name
+
+
+def test_ensembles_are_refused():
+    ens = pl.simulate(SP, [[0.1], [0.2]], [[0.0], [0.0]], t_end=0.1, dt=0.01)
+    with pytest.raises(ValueError, match="single trajectory"):
+        plotting.plot_energy(ens)
+
+
+# --------------------------------------------------------------------------- analysis used above
+def test_exact_period_limits():
+    small = 2 * np.pi * np.sqrt(SP.lengths[0] / SP.g)
+    assert analysis.exact_period(SP, 1e-9) == pytest.approx(small, rel=1e-14)
+    assert analysis.exact_period(SP, 3.14) > 5 * small  # diverges at the top
+    long = pl.simple_pendulum(length=4.0)
+    assert analysis.exact_period(long, 1.0) == pytest.approx(2 * analysis.exact_period(SP, 1.0))
+    with pytest.raises(ValueError, match="amplitude"):
+        analysis.exact_period(SP, np.pi)
+    with pytest.raises(ValueError, match="simple pendulum"):
+        analysis.exact_period(DP, 1.0)
+
+
+def test_measured_periods_match_the_elliptic_integral():
+    amplitudes = np.array([0.3, 1.5, 2.8])
+    traj = pl.simulate(SP, amplitudes[:, None].copy(), np.zeros((3, 1)), t_end=25.0, dt=0.01)
+    measured = analysis.oscillation_period(traj)
+    assert measured.shape == (3,)
+    np.testing.assert_allclose(measured, analysis.exact_period(SP, amplitudes), rtol=1e-6)
+    # Negative control: the small-angle period is wrong by far more at these amplitudes.
+    small = 2 * np.pi * np.sqrt(SP.lengths[0] / SP.g)
+    assert np.all(np.abs(measured[1:] / small - 1) > 0.1)
+
+
+def test_period_of_a_rotation_is_refused(rotating):
+    with pytest.raises(ValueError, match="crossing"):
+        analysis.oscillation_period(rotating)
+
+
+def test_fft_frequencies_match_the_normal_modes():
+    modes = analysis.normal_mode_frequencies(DP)
+    np.testing.assert_allclose(
+        modes**2, 9.81 * np.array([2 - np.sqrt(2), 2 + np.sqrt(2)]), rtol=1e-12
+    )
+    small = pl.simulate(DP, [0.01, 0.0], [0.0, 0.0], t_end=100.0, dt=0.02)
+    np.testing.assert_allclose(analysis.dominant_frequencies(small), modes, rtol=2e-4)
+    # Negative control: at a large amplitude the frequencies have moved away.
+    large = pl.simulate(DP, [0.8, 0.0], [0.0, 0.0], t_end=100.0, dt=0.02)
+    assert np.max(np.abs(analysis.dominant_frequencies(large) / modes - 1)) > 5e-3
+
+
+def test_linearized_solution_matches_small_motion_and_fails_for_large():
+    t = np.arange(0, 201) * 0.01
+    for eq, start in (("down-down", [1e-3, -1e-3]), ("down-up", [1e-5, np.pi])):
+        angles = np.array([0.0, 0.0 if eq == "down-down" else np.pi])
+        traj = pl.simulate(DP, np.array(start), np.zeros(2), t_end=2.0, dt=0.01)
+        theta, omega = analysis.linearized_solution(DP, eq, traj.theta[0], traj.omega[0], t)
+        size = np.max(np.abs(traj.theta - angles))  # how far the motion goes
+        assert np.max(np.abs(theta - traj.theta)) < 1e-3 * size
+        assert omega.shape == (201, 2)
+    big = pl.simulate(DP, np.array([0.8, 0.0]), np.zeros(2), t_end=2.0, dt=0.01)
+    theta, _ = analysis.linearized_solution(DP, "down-down", big.theta[0], big.omega[0], t)
+    assert np.max(np.abs(theta - big.theta)) > 0.05
+    with pytest.raises(ValueError, match="equilibrium"):
+        analysis.linearized_solution(DP, "down", [0, 0], [0, 0], t)
+
+
+def test_rest_state_at_energy():
+    for energy in (-25.0, 0.0, 29.0):
+        theta = analysis.rest_state_at_energy(DP, energy)
+        assert theta[0] == theta[1]
+        assert float(DP.potential_energy(theta)) == pytest.approx(energy, abs=1e-10)
+    with pytest.raises(ValueError, match="energy"):
+        analysis.rest_state_at_energy(DP, 30.0)
