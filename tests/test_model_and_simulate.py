@@ -100,6 +100,19 @@ def test_inputs_are_not_modified():
         assert np.array_equal(a, b)
 
 
+def test_starting_from_momenta_matches_starting_from_velocities():
+    theta0, omega0 = np.array([1.0, 0.5]), np.array([0.3, -0.2])
+    p0 = DP.momenta(theta0, omega0)
+    for method in ("glrk4", "leapfrog_velocity"):
+        a = pl.simulate(DP, theta0, omega0, t_end=1.0, dt=0.01, method=method)
+        b = pl.simulate(DP, theta0, p0=p0, t_end=1.0, dt=0.01, method=method)
+        assert np.allclose(a.theta, b.theta, rtol=0, atol=1e-13)
+    with pytest.raises(TypeError, match="exactly one"):
+        pl.simulate(DP, theta0, omega0, p0=p0)
+    with pytest.raises(TypeError, match="exactly one"):
+        pl.simulate(DP, theta0)
+
+
 def test_save_every_thins_the_output():
     full = pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=1.0, dt=0.01, method="rk4")
     thin = pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=1.0, dt=0.01, method="rk4", save_every=10)

@@ -129,8 +129,13 @@ def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_st
         advance(slice(None))
         return
     bounds = np.linspace(0, members, workers + 1).astype(int)
-    with ThreadPoolExecutor(workers) as pool:
-        list(pool.map(advance, [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]))
+    list(_pool(workers).map(advance, [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]))
+
+
+@functools.cache
+def _pool(workers: int) -> ThreadPoolExecutor:
+    """One thread pool for the whole session (starting threads per call costs milliseconds)."""
+    return ThreadPoolExecutor(workers, thread_name_prefix="pendulum_lab")
 
 
 def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -192,11 +197,12 @@ def _progress_bar(total: int, enabled: bool | None, work: int, label: str):
 def simulate(
     model: PendulumModel,
     theta0,
-    omega0,
+    omega0=None,
     t_end: float = 20.0,
     dt: float = 0.01,
     method="glrk4",
     *,
+    p0=None,
     save_every: int = 1,
     progress: bool | None = None,
 ) -> Trajectory:
@@ -214,6 +220,9 @@ def simulate(
         Step size, ``> 0``.
     method : str or Method
         A key of :data:`pendulum_lab.METHODS`.
+    p0 : array_like, shape like ``theta0``, optional
+        Initial canonical momenta, instead of ``omega0`` (give exactly one):
+        restarting from a saved ``(theta, p)`` then involves no conversion.
     save_every : int
         Keep every ``save_every``-th state (memory for long runs and ensembles).
     progress : bool, optional
@@ -247,10 +256,13 @@ def simulate(
     _check_model(model)
     method = get_method(method)
     theta0 = check.state_array("theta0", theta0, model.n)
-    omega0 = check.state_array("omega0", omega0, model.n)
-    if theta0.shape != omega0.shape:
+    if (omega0 is None) == (p0 is None):
+        raise TypeError("give exactly one of `omega0` (angular velocities) and `p0` (momenta)")
+    name, start = ("omega0", omega0) if p0 is None else ("p0", p0)
+    start = check.state_array(name, start, model.n)
+    if theta0.shape != start.shape:
         raise ValueError(
-            f"`theta0` and `omega0` must have the same shape, got {theta0.shape} and {omega0.shape}"
+            f"`theta0` and `{name}` must have the same shape, got {theta0.shape} and {start.shape}"
         )
     dt = check.positive_number("dt", dt)
     t_end = check.positive_number("t_end", t_end)
@@ -264,7 +276,11 @@ def simulate(
     batch_shape = theta0.shape[:-1]
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    y = model.momenta(q, omega0.reshape(-1, model.n)) if canonical else omega0.reshape(-1, model.n)
+    y = start.reshape(-1, model.n)
+    if canonical and p0 is None:
+        y = model.momenta(q, y)
+    elif not canonical and p0 is not None:
+        y = model.velocities(q, y)
     y = np.array(y, order="C")
     members = q.shape[0]
     saved_q = np.full((members, n_saved, model.n), np.nan)
