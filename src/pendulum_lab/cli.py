@@ -267,6 +267,27 @@ def _add_lab_command(subparsers) -> None:
     lab.set_defaults(handler=run_lab)
 
 
+def run_warmup(args) -> int:
+    """Compile the numerical kernels now instead of on first use."""
+    from .simulate import warm_up
+
+    seconds = warm_up(links=args.links)
+    print(f"pendulum_lab kernels ready for chains of {args.links} link(s) ({seconds:.1f} s)")
+    return 0
+
+
+def _add_warmup_command(subparsers) -> None:
+    warm = subparsers.add_parser(
+        "warmup",
+        help="compile the numerical kernels now (otherwise they compile on first use)",
+        description="Compile, or load from the disk cache, every integrator kernel for the "
+        "given chain lengths. Run once after installing to make the first notebook fast.",
+    )
+    warm.add_argument("--links", type=int, nargs="+", default=[1, 2], metavar="N",
+                      help="chain lengths to prepare (default: 1 2)")
+    warm.set_defaults(handler=run_warmup)
+
+
 def _add_optional_commands(subparsers) -> None:
     """Subcommands contributed by optional modules (today: ``pendulum_lab.report``)."""
     try:
@@ -290,6 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_lab_command(subparsers)
+    _add_warmup_command(subparsers)
     _add_optional_commands(subparsers)
     parser.set_defaults(commands=tuple(subparsers.choices))
     return parser

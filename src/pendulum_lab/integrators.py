@@ -31,6 +31,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -136,7 +137,37 @@ AccelerationFn = types.FunctionType(ACCELERATION)
 STEP = types.Tuple((VECTOR, VECTOR, types.int64, types.int64))(
     HamiltonFn, AccelerationFn, VECTOR, VECTOR, types.float64, VECTOR, types.boolean
 )
-jit_step = numba.njit(STEP, cache=True)
+
+
+class LazyKernel:
+    """A Numba kernel with a fixed signature, compiled on first use.
+
+    Numba compiles a function with an explicit signature as soon as it is
+    decorated; on a machine that has never run the package that would put
+    half a minute into ``import pendulum_lab``. Wrapped like this, only the
+    methods actually used get compiled, once: ``cache=True`` keeps the machine
+    code on disk for later processes. ``py_func`` is the Python source.
+    """
+
+    def __init__(self, signature, py_func, **options):
+        functools.update_wrapper(self, py_func)
+        self.py_func = py_func
+        self.signature = signature
+        self.options = options
+
+    @functools.cached_property
+    def compiled(self):
+        """The Numba dispatcher (compiled, or loaded from the cache, now)."""
+        return numba.njit(self.signature, **self.options)(self.py_func)
+
+    def __call__(self, *args):
+        return self.compiled(*args)
+
+
+def jit_step(py_func) -> LazyKernel:
+    """Declare a step function: a kernel with the :data:`STEP` signature."""
+    return LazyKernel(STEP, py_func, cache=True)
+
 
 # --------------------------------------------------------------------------- implicit solver
 MAX_SWEEPS = 100
@@ -353,8 +384,7 @@ RUNNING, NOT_FINITE, NOT_CONVERGED = 0, 1, 2
 STEPS, SWEEPS, CALLS, STATUS = 0, 1, 2, 3
 
 
-@numba.njit(RUN, cache=True, nogil=True)
-def run(step, hamilton, acceleration, separable, q, p, h, n_steps, first_step, save_every,
+def _run(step, hamilton, acceleration, separable, q, p, h, n_steps, first_step, save_every,
         params, saved_q, saved_p, stats):
     """Advance every row of ``(q, p)`` (shape ``(K, n)``) by ``n_steps`` steps, in place.
 
@@ -388,6 +418,9 @@ def run(step, hamilton, acceleration, separable, q, p, h, n_steps, first_step, s
         q[k], p[k] = qk, pk
 
 
+run = LazyKernel(RUN, _run, cache=True, nogil=True)
+
+
 # --------------------------------------------------------------------------- registry
 @dataclass(frozen=True)
 class Method:
@@ -406,7 +439,9 @@ class Method:
         ``(q, p)`` or, for the course report's versions, ``(q, v)``.
     summary : str
         One line for tables and dropdowns.
-    kernel : compiled step function (see the module docstring)
+    kernel : LazyKernel
+        The step function (see the module docstring); ``kernel.py_func`` is
+        its Python source, ``kernel.compiled`` the machine code.
     """
 
     name: str

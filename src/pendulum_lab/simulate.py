@@ -16,6 +16,7 @@ from . import codegen
 from .integrators import (
     CALLS,
     MAX_SWEEPS,
+    METHODS,
     NOT_CONVERGED,
     NOT_FINITE,
     RUNNING,
@@ -28,9 +29,9 @@ from .integrators import (
     get_method,
     run,
 )
-from .model import PendulumModel
+from .model import PendulumModel, n_pendulum
 
-__all__ = ["Trajectory", "hamiltonian_field", "simulate", "step"]
+__all__ = ["Trajectory", "hamiltonian_field", "simulate", "step", "warm_up"]
 
 # Show a progress bar by default once a run does this many state updates
 # (steps times ensemble size): a few seconds of work or more.
@@ -119,10 +120,12 @@ def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_st
     Large ensembles are split into one slice per core; the compiled loop
     releases the GIL, so the slices run in parallel threads.
     """
+    loop, step_kernel = run.compiled, method.kernel.compiled  # compile before any threads
+
     def advance(rows):
-        run(method.kernel, field.hamilton, field.acceleration, field.separable, q[rows],
-            p[rows], float(h), n_steps, first_step, save_every, field.params, saved_q[rows],
-            saved_p[rows], stats[rows])
+        loop(step_kernel, field.hamilton, field.acceleration, field.separable, q[rows],
+             p[rows], float(h), n_steps, first_step, save_every, field.params, saved_q[rows],
+             saved_p[rows], stats[rows])
 
     members, workers = q.shape[0], os.cpu_count() or 1
     if members < PARALLEL_MIN_MEMBERS or workers == 1:
@@ -357,3 +360,38 @@ def simulate(
         wall_time=wall,
         completed=completed,
     )
+
+
+def warm_up(links=(1, 2), methods=None, progress: bool = True) -> float:
+    """Compile now, or load from the disk cache, the kernels a course session uses.
+
+    Numba compiles each kernel the first time it runs on a machine (a few
+    seconds each) and keeps the machine code on disk. Calling this ahead of
+    time (``pendulum-lab warmup``; the Binder image does it while it is
+    built) spares students the wait.
+
+    Parameters
+    ----------
+    links : sequence of int
+        Chain lengths to prepare (1: simple pendulum, 2: double pendulum, ...).
+    methods : sequence of str, optional
+        Method names; all of :data:`pendulum_lab.METHODS` by default.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    float
+        Seconds spent.
+    """
+    names = [get_method(m).name for m in (METHODS if methods is None else methods)]
+    links = [check.integer_at_least("links", n, 1) for n in links]
+    start = time.perf_counter()
+    jobs = [(n, name) for n in links for name in names]
+    if progress:
+        from tqdm.auto import tqdm
+
+        jobs = tqdm(jobs, desc="compiling kernels", unit="kernel")
+    for n, name in jobs:
+        simulate(n_pendulum(n), np.full(n, 0.1), np.zeros(n), t_end=0.01, dt=0.01, method=name)
+    return time.perf_counter() - start
