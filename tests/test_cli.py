@@ -207,3 +207,12 @@ def test_python_dash_m_runs_the_same_parser():
     )
     assert done.returncode == 0
     assert "--no-browser" in done.stdout and "--dir" in done.stdout
+
+
+def test_warmup_compiles_the_requested_kernels(capsys):
+    from pendulum_lab import cli
+
+    assert cli.main(["warmup", "--links", "1"]) == 0
+    assert "chains of [1] link(s)" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        cli.main(["warmup", "--links", "x"])
