@@ -558,7 +558,7 @@ class WorkPrecision:
 
 
 def work_precision(model: PendulumModel, method, theta0, omega0, t_end: float,
-                   dts) -> list[WorkPrecision]:
+                   dts, repeats: int = 1) -> list[WorkPrecision]:
     """Energy error against cost for a fixed-step method at several step sizes.
 
     Parameters
@@ -569,6 +569,9 @@ def work_precision(model: PendulumModel, method, theta0, omega0, t_end: float,
     t_end : float
     dts : sequence of float
         Step sizes, each ``> 0``.
+    repeats : int
+        Run each step size this many times and keep the shortest wall time
+        (runs of a few milliseconds are noisy), ``>= 1``.
 
     Returns
     -------
@@ -576,13 +579,16 @@ def work_precision(model: PendulumModel, method, theta0, omega0, t_end: float,
         One per step size, in the order given.
     """
     method = get_method(method)
+    repeats = check.integer_at_least("repeats", repeats, 1)
     points = []
     for dt in dts:
-        traj = simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method,
-                        progress=False)
+        runs = [simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method,
+                         progress=False) for _ in range(repeats)]
+        traj = runs[0]
         points.append(WorkPrecision(method.name, float(dt),
                                     float(np.max(np.abs(traj.energy_error))),
-                                    traj.wall_time, traj.evaluations, traj.completed))
+                                    min(run.wall_time for run in runs), traj.evaluations,
+                                    traj.completed))
     return points
 
 
@@ -657,13 +663,15 @@ def dop853_run(model: PendulumModel, theta0, omega0, t_end: float,
 
 
 def dop853_work_precision(model: PendulumModel, theta0, omega0, t_end: float,
-                          rtols) -> list[WorkPrecision]:
-    """:func:`work_precision` for DOP853 at several tolerances."""
+                          rtols, repeats: int = 1) -> list[WorkPrecision]:
+    """:func:`work_precision` for DOP853 at several tolerances ``rtols``."""
+    repeats = check.integer_at_least("repeats", repeats, 1)
     points = []
     for rtol in rtols:
-        run = dop853_run(model, theta0, omega0, t_end, rtol)
-        points.append(WorkPrecision("DOP853", float(rtol), float(np.max(np.abs(run.energy_error))),
-                                    run.wall_time, run.evaluations, True))
+        runs = [dop853_run(model, theta0, omega0, t_end, rtol) for _ in range(repeats)]
+        points.append(WorkPrecision("DOP853", float(rtol),
+                                    float(np.max(np.abs(runs[0].energy_error))),
+                                    min(run.wall_time for run in runs), runs[0].evaluations, True))
     return points
 
 
