@@ -266,3 +266,28 @@ def test_energy_explorer_range():
     ex = widgets.explore_energy(dp, t_end=1.0)
     assert ex.controls["energy"].max == pytest.approx(depth)
     assert ex.controls["energy"].min > -depth
+
+
+def _pixels(explorer) -> np.ndarray:
+    import io
+
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(explorer.widget.children[-1].value)))
+
+
+@pytest.mark.parametrize("n, plots", [
+    (2, ("energy", "angles")),
+    (2, ("phase", "pendulum", "energy_error")),
+    (1, ("portrait", "energy")),
+])
+def test_an_update_draws_exactly_what_a_fresh_explorer_draws(n, plots):
+    # Updates reuse the axes (for speed); the picture must not depend on it.
+    model = pl.n_pendulum(n)
+    ex = widgets.explore(model, method="rk4", t_end=3.0, plots=plots)
+    before = _pixels(ex)
+    ex.controls["theta1" if n == 2 else "theta"].value = 0.7
+    fresh = widgets.explore(model, method="rk4", t_end=3.0, plots=plots,
+                            theta0=ex.trajectory.theta[0], omega0=ex.trajectory.omega[0])
+    assert np.array_equal(_pixels(ex), _pixels(fresh))
+    assert not np.array_equal(_pixels(ex), before)  # negative control: a new state is drawn
