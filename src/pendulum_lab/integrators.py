@@ -209,12 +209,14 @@ def explicit_rk(hamilton, q, p, h, params, a, b):
     """One step of the explicit Runge-Kutta method ``(a, b)`` for Hamilton's equations.
 
     Stage ``i`` evaluates the field at ``y + h sum_{j<i} a_ij k_j``; the step
-    is ``y + h sum_i b_i k_i``. Written with element loops: small temporary
-    arrays would cost more than the arithmetic.
+    is ``y + h sum_i b_i k_i``. Written with element loops and one block of
+    memory for all the vectors: allocating each small array separately would
+    cost more than the arithmetic.
     """
     stages, n = b.size, q.size
-    kq, kp = np.zeros((stages, n)), np.zeros((stages, n))
-    qi, pi = np.empty(n), np.empty(n)
+    work = np.empty((2 * stages + 4, n))
+    kq, kp = work[:stages], work[stages : 2 * stages]
+    qi, pi, q1, p1 = work[2 * stages], work[2 * stages + 1], work[-2], work[-1]
     for i in range(stages):
         for m in range(n):
             qi[m], pi[m] = q[m], p[m]
@@ -222,7 +224,7 @@ def explicit_rk(hamilton, q, p, h, params, a, b):
                 qi[m] += h * a[i, j] * kq[j, m]
                 pi[m] += h * a[i, j] * kp[j, m]
         hamilton(qi, pi, params, kq[i], kp[i])
-    q1, p1 = q.copy(), p.copy()
+    q1[:], p1[:] = q, p
     for i in range(stages):
         for m in range(n):
             q1[m] += h * b[i] * kq[i, m]
@@ -384,6 +386,15 @@ RUNNING, NOT_FINITE, NOT_CONVERGED = 0, 1, 2
 STEPS, SWEEPS, CALLS, STATUS = 0, 1, 2, 3
 
 
+@numba.njit(cache=True)
+def _all_finite(x):
+    """``np.all(np.isfinite(x))`` without allocating a temporary array."""
+    for value in x:
+        if not math.isfinite(value):
+            return False
+    return True
+
+
 def _run(step, hamilton, acceleration, separable, q, p, h, n_steps, first_step, save_every,
         params, saved_q, saved_p, stats):
     """Advance every row of ``(q, p)`` (shape ``(K, n)``) by ``n_steps`` steps, in place.
@@ -407,7 +418,7 @@ def _run(step, hamilton, acceleration, separable, q, p, h, n_steps, first_step, 
                 stats[k, STATUS] = NOT_CONVERGED
                 break
             qk, pk = q1, p1
-            if not (np.all(np.isfinite(qk)) and np.all(np.isfinite(pk))):
+            if not (_all_finite(qk) and _all_finite(pk)):
                 stats[k, STATUS] = NOT_FINITE
                 break
             stats[k, STEPS] = s
