@@ -42,18 +42,16 @@ from PIL import Image
 
 from . import plotting
 from .model import PendulumModel
-from .simulate import Trajectory, simulate
+from .simulate import Trajectory
 from .widgets import (
     Instrument,
     _check_model,
-    _check_steps,
-    _initial_state,
     _keys,
-    _model_from,
     _parameter_controls,
     _run_controls,
     _state_controls,
     _state_vector,
+    simulate_controls,
 )
 
 __all__ = [
@@ -363,19 +361,7 @@ class Simulator(Instrument):
 
     # ---- the explorer's hooks --------------------------------------------------------------
     def _compute(self):
-        c = self.controls
-        _check_steps(c["t_end"].value, c["dt"].value)
-        model = _model_from(self.model.n, c)
-        theta0, omega0 = _initial_state(model.n, c)
-        traj = simulate(
-            model,
-            theta0,
-            omega0,
-            t_end=c["t_end"].value,
-            dt=c["dt"].value,
-            method=c["method"].value,
-        )
-        return model, traj
+        return simulate_controls(self.model.n, self.controls)
 
     def _draw(self, figure):
         self.scene = PendulumScene(figure, self.model, self.trajectory, self.trail, readout=False)

@@ -394,20 +394,7 @@ class Explorer(Instrument):
         super().__init__(model, controls, columns, rows=self._rows)
 
     def _compute(self):
-        c = self.controls
-        _check_steps(c["t_end"].value, c["dt"].value)
-        model = _model_from(self.model.n, c)
-        theta0, omega0 = _initial_state(model.n, c)
-        traj = simulate(
-            model,
-            theta0,
-            omega0,
-            t_end=c["t_end"].value,
-            dt=c["dt"].value,
-            method=c["method"].value,
-            progress=False,
-        )
-        return model, traj
+        return simulate_controls(self.model.n, self.controls)
 
     def _redraw(self) -> None:
         # Building axes and their ticks is most of a redraw: on an update, keep
@@ -432,6 +419,30 @@ class Explorer(Instrument):
             wspace=0.28,
             hspace=0.45,
         )
+
+
+def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumModel, Trajectory]:
+    """The model and the trajectory that a set of explorer controls describes.
+
+    Parameters
+    ----------
+    n : int
+        Number of links.
+    controls : dict
+        Name -> widget, with the initial-state, parameter, ``dt``, ``t_end``
+        and ``method`` controls of :func:`explore`.
+    origin : callable ``model -> angles``, optional
+        If given, the angle controls are offsets from these angles.
+    """
+    c = controls
+    _check_steps(c["t_end"].value, c["dt"].value)
+    model = _model_from(n, c)
+    theta0, omega0 = _initial_state(n, c)
+    if origin is not None:
+        theta0 = theta0 + origin(model)
+    traj = simulate(model, theta0, omega0, t_end=c["t_end"].value, dt=c["dt"].value,
+                    method=c["method"].value, progress=False)
+    return model, traj
 
 
 def _remove_data(ax) -> None:
@@ -585,22 +596,11 @@ class EquilibriumExplorer(Instrument):
         return analysis._equilibrium(self.model, self.controls["equilibrium"].value)
 
     def _compute(self):
-        c = self.controls
-        _check_steps(c["t_end"].value, c["dt"].value)
-        model = _model_from(self.model.n, c)
-        eq = analysis._equilibrium(model, c["equilibrium"].value)
-        offsets, omega0 = _initial_state(model.n, c)
-        theta0 = np.array([float(a) for a in eq.angles]) + offsets
-        traj = simulate(
-            model,
-            theta0,
-            omega0,
-            t_end=c["t_end"].value,
-            dt=c["dt"].value,
-            method=c["method"].value,
-            progress=False,
-        )
-        return model, traj
+        def equilibrium_angles(model):
+            eq = analysis._equilibrium(model, self.controls["equilibrium"].value)
+            return np.array([float(a) for a in eq.angles])
+
+        return simulate_controls(self.model.n, self.controls, origin=equilibrium_angles)
 
     def _draw(self, figure):
         left = figure.add_subplot(1, 2, 1)
