@@ -216,3 +216,10 @@ def test_warmup_compiles_the_requested_kernels(capsys):
     assert "chains of [1] link(s)" in capsys.readouterr().out
     with pytest.raises(SystemExit):
         cli.main(["warmup", "--links", "x"])
+
+
+def test_running_as_root_adds_allow_root_once(course):
+    assert "--allow-root" in cli.lab_command(course, as_root=True)
+    assert "--allow-root" not in cli.lab_command(course, as_root=False)  # negative control
+    twice = cli.lab_command(course, as_root=True, extra=["--allow-root"])
+    assert twice.count("--allow-root") == 1

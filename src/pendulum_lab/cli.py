@@ -150,10 +150,14 @@ def lab_command(
     port: int | None = None,
     extra: Sequence[str] = (),
     python: str | None = None,
+    as_root: bool | None = None,
 ) -> list[str]:
     """The command line that starts JupyterLab on ``root`` (opening the start notebook).
 
     ``extra`` options are appended unchanged (they come last, so they win).
+    Run as root (containers, CI machines), JupyterLab refuses to start unless
+    told ``--allow-root``; ``as_root`` (by default: the effective user is
+    root) adds it.
     """
     root = Path(root).resolve()
     command = [python or sys.executable, "-m", "jupyterlab", f"--ServerApp.root_dir={root}"]
@@ -163,6 +167,10 @@ def lab_command(
         command.append("--no-browser")
     if port is not None:
         command.append(f"--port={port}")
+    if as_root is None:
+        as_root = hasattr(os, "geteuid") and os.geteuid() == 0
+    if as_root and "--allow-root" not in extra:
+        command.append("--allow-root")
     return command + list(extra)
 
 
