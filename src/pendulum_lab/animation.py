@@ -41,17 +41,16 @@ from matplotlib.figure import Figure
 from PIL import Image
 
 from . import plotting
-from .model import PendulumModel
+from .model import PendulumModel, check_model
 from .simulate import Trajectory
 from .widgets import (
     Instrument,
-    _check_model,
     _keys,
     _parameter_controls,
     _run_controls,
     _state_controls,
-    _state_vector,
     simulate_controls,
+    start_state,
 )
 
 __all__ = [
@@ -466,15 +465,8 @@ def simulator(
     >>> sim.time
     1.0
     """
-    model = _check_model(model)
-    n = model.n
-    default = [1.0] if n == 1 else np.linspace(2.0, 2.5, n)
-    theta0 = _state_vector("theta0", theta0, default, n)
-    omega0 = _state_vector("omega0", omega0, np.zeros(n), n)
-    if np.any(np.abs(theta0) > np.pi):
-        raise ValueError(f"`theta0` entries must lie in [-pi, pi], got {theta0}")
-    if np.any(np.abs(omega0) > 10):
-        raise ValueError(f"`omega0` entries must lie in [-10, 10] rad/s, got {omega0}")
+    model = check_model(model)
+    theta0, omega0 = start_state(model.n, theta0, omega0)
     if speed not in SPEEDS:
         raise ValueError(f"`speed` must be one of {SPEEDS}, got {speed!r}")
     if not (isinstance(trail, (int, float)) and trail >= 0):
@@ -568,7 +560,7 @@ def html_animation(
 
     if not isinstance(traj, Trajectory):
         raise TypeError(f"`traj` must be a Trajectory, got {type(traj).__name__}")
-    _check_model(model)
+    check_model(model)
     if isinstance(max_frames, bool) or not isinstance(max_frames, int) or max_frames < 1:
         raise ValueError(f"`max_frames` must be an integer >= 1, got {max_frames!r}")
     frames = frame_indices(traj, fps, speed)

@@ -52,7 +52,7 @@ from sympy.core.cache import clear_cache
 from . import _validation as check
 from .integrators import ConvergenceError, get_method
 from .mechanics import Chain
-from .model import PendulumModel, n_pendulum
+from .model import PendulumModel, check_model, n_pendulum
 from .simulate import PROGRESS_THRESHOLD, Trajectory, simulate, step
 
 __all__ = [
@@ -89,15 +89,6 @@ _MIN_CHUNK = 1000
 
 
 # --------------------------------------------------------------------------- helpers
-def _check_model(model) -> PendulumModel:
-    if not isinstance(model, PendulumModel):
-        raise TypeError(
-            "`model` must be a PendulumModel (from simple_pendulum, double_pendulum or "
-            f"n_pendulum), got {type(model).__name__}"
-        )
-    return model
-
-
 def _initial_state(model, theta0, omega0):
     theta0 = check.state_array("theta0", theta0, model.n)
     omega0 = check.state_array("omega0", omega0, model.n)
@@ -287,7 +278,7 @@ def ensemble(
     >>> traj.t.tolist(), traj.theta.shape
     ([0.0, 1.0], (2, 3, 2))
     """
-    _check_model(model)
+    check_model(model)
     method = get_method(method)
     theta0, omega0 = _initial_state(model, theta0, omega0)
     t_end, dt, n_steps = _step_count(t_end, dt)
@@ -434,7 +425,7 @@ def separation(
     >>> bool(sep.distance[-1] > 100 * sep.delta)
     True
     """
-    _check_model(model)
+    check_model(model)
     theta0, omega0 = _initial_state(model, theta0, omega0)
     delta = check.positive_number("delta", delta)
     n = model.n
@@ -598,7 +589,7 @@ def lyapunov_benettin(
     >>> bool(est.exponent > 0.5)
     True
     """
-    _check_model(model)
+    check_model(model)
     method = get_method(method)
     theta0, omega0 = _initial_state(model, theta0, omega0)
     t_end, dt, n_steps = _step_count(t_end, dt)
@@ -767,7 +758,7 @@ def lyapunov_variational(
     >>> bool(est.exponent > 0.5)
     True
     """
-    _check_model(model)
+    check_model(model)
     method = get_method(method)
     theta0, omega0 = _initial_state(model, theta0, omega0)
     t_end, dt, n_steps = _step_count(t_end, dt)
@@ -868,7 +859,7 @@ def section_states(
     >>> bool(np.allclose(dp.energy(theta0, omega0), -15.0)), bool(np.all(omega0[:, 0] > 0))
     (True, True)
     """
-    _check_model(model)
+    check_model(model)
     n = model.n
     if n < 2:
         raise ValueError("`model` must have at least two links for a Poincare section")
@@ -1093,7 +1084,7 @@ def poincare_section(
     >>> bool(np.all(sec.residual < 1e-10)), len(sec.t) > 0
     (True, True)
     """
-    _check_model(model)
+    check_model(model)
     method = get_method(method)
     theta0, omega0 = _initial_state(model, theta0, omega0)
     t_end, dt, n_steps = _step_count(t_end, dt)
@@ -1214,7 +1205,7 @@ def energy_sections(
         ``{energy: PoincareSection}``; each section's ``orbit`` numbers its
         own orbits from 0.
     """
-    _check_model(model)
+    check_model(model)
     if model.n != 2:
         raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
     orbits = check.integer_at_least("orbits", orbits, 2)
@@ -1330,7 +1321,7 @@ def can_flip(model: PendulumModel, theta, omega=None) -> np.ndarray:
     >>> can_flip(dp, [[0.5, 0.5], [2.0, 2.5]]).tolist()
     [False, True]
     """
-    _check_model(model)
+    check_model(model)
     theta = check.state_array("theta", theta, model.n)
     omega = np.zeros_like(theta) if omega is None else check.state_array("omega", omega, model.n)
     energy = model.energy(theta, omega)
@@ -1480,7 +1471,7 @@ def flip_time_map(
     >>> fm.time.shape, bool(fm.forbidden[2:4, 2:4].all())
     ((6, 6), True)
     """
-    _check_model(model)
+    check_model(model)
     if model.n != 2:
         raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
     method = get_method(method)
@@ -1656,7 +1647,7 @@ def small_angle_comparison(
     """
     from .analysis import linearized_solution
 
-    _check_model(model)
+    check_model(model)
     theta0, omega0 = _initial_state(model, theta0, omega0)
     threshold = check.positive_number("threshold", threshold)
     traj = ensemble(
@@ -1826,7 +1817,7 @@ def compare_energy(
     -------
     EnergyComparison
     """
-    _check_model(model)
+    check_model(model)
     return EnergyComparison(
         {
             get_method(m).name: ensemble(

@@ -29,7 +29,7 @@ from .integrators import (
     get_method,
     run,
 )
-from .model import PendulumModel, n_pendulum
+from .model import PendulumModel, check_model, n_pendulum
 
 __all__ = ["Trajectory", "hamiltonian_field", "simulate", "step", "warm_up"]
 
@@ -105,14 +105,6 @@ def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
     return _field(model.n, (*model.masses, *model.lengths, model.g), model.separable)
 
 
-def _check_model(model):
-    if not isinstance(model, PendulumModel):
-        raise TypeError(
-            "`model` must be a PendulumModel (from simple_pendulum, double_pendulum or "
-            f"n_pendulum), got {type(model).__name__}"
-        )
-
-
 def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_step,
              save_every, saved_q, saved_p, stats):
     """Run the compiled time loop on rows ``q, p`` of shape ``(K, n)``, in place.
@@ -161,7 +153,7 @@ def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, n
     >>> q1.shape
     (1,)
     """
-    _check_model(model)
+    check_model(model)
     method = get_method(method)
     q0 = check.state_array("q0", q0, model.n)
     p0 = check.state_array("p0", p0, model.n)
@@ -256,7 +248,7 @@ def simulate(
     >>> traj.theta.shape
     (11, 1)
     """
-    _check_model(model)
+    check_model(model)
     method = get_method(method)
     theta0 = check.state_array("theta0", theta0, model.n)
     if (omega0 is None) == (p0 is None):

@@ -42,7 +42,7 @@ from matplotlib.figure import Figure
 
 from . import analysis, plotting
 from .integrators import METHODS, ConvergenceError, get_method
-from .model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from .model import PendulumModel, check_model, double_pendulum, n_pendulum, simple_pendulum
 from .simulate import Trajectory, simulate
 
 __all__ = [
@@ -203,15 +203,6 @@ def _check_steps(t_end: float, dt: float) -> int:
 
 def _column(title: str, controls: Sequence[widgets.Widget]) -> widgets.VBox:
     return widgets.VBox([widgets.HTML(f"<b>{title}</b>"), *controls])
-
-
-def _check_model(model) -> PendulumModel:
-    if not isinstance(model, PendulumModel):
-        raise TypeError(
-            "`model` must be a PendulumModel (pl.simple_pendulum(), "
-            f"pl.double_pendulum() or pl.n_pendulum(n)), got {type(model).__name__}"
-        )
-    return model
 
 
 def _state_vector(name: str, value, default, n: int) -> np.ndarray:
@@ -421,6 +412,23 @@ class Explorer(Instrument):
         )
 
 
+def start_state(n: int, theta0=None, omega0=None) -> tuple[np.ndarray, np.ndarray]:
+    """The explorers' starting state: the given one checked, or the default.
+
+    The default is at rest from 1 rad (one link) or from angles spread over
+    2.0-2.5 rad (a lively, chaotic release). Angles must lie in [-pi, pi] and
+    velocities in [-10, 10] rad/s, the range of the sliders.
+    """
+    default = [1.0] if n == 1 else np.linspace(2.0, 2.5, n)
+    theta0 = _state_vector("theta0", theta0, default, n)
+    omega0 = _state_vector("omega0", omega0, np.zeros(n), n)
+    if np.any(np.abs(theta0) > np.pi):
+        raise ValueError(f"`theta0` entries must lie in [-pi, pi], got {theta0}")
+    if np.any(np.abs(omega0) > 10):
+        raise ValueError(f"`omega0` entries must lie in [-10, 10] rad/s, got {omega0}")
+    return theta0, omega0
+
+
 def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumModel, Trajectory]:
     """The model and the trajectory that a set of explorer controls describes.
 
@@ -532,15 +540,8 @@ def explore(
     >>> float(ex.trajectory.theta[0, 0])
     0.5
     """
-    model = _check_model(model)
-    n = model.n
-    default = [1.0] if n == 1 else np.linspace(2.0, 2.5, n)
-    theta0 = _state_vector("theta0", theta0, default, n)
-    omega0 = _state_vector("omega0", omega0, np.zeros(n), n)
-    if np.any(np.abs(theta0) > np.pi):
-        raise ValueError(f"`theta0` entries must lie in [-pi, pi], got {theta0}")
-    if np.any(np.abs(omega0) > 10):
-        raise ValueError(f"`omega0` entries must lie in [-10, 10] rad/s, got {omega0}")
+    model = check_model(model)
+    theta0, omega0 = start_state(model.n, theta0, omega0)
     ex = Explorer(model, method, t_end, dt, theta0, omega0, plots)
     ex.update()
     return ex
@@ -658,7 +659,7 @@ def explore_equilibrium(
         ``"method"``, ``"dt"``, ``"t_end"``; the left panel shows the
         linearised motion ``exp(A t) x0``, the right the simulation.
     """
-    model = _check_model(model)
+    model = check_model(model)
     n = model.n
     names = [eq.name for eq in model.chain.equilibria]
     equilibrium = names[0] if equilibrium is None else equilibrium
@@ -753,7 +754,7 @@ def explore_energy(
     EnergyExplorer
         Controls ``"energy"``, ``"method"``, ``"dt"``, ``"t_end"``.
     """
-    model = _check_model(model)
+    model = check_model(model)
     depth = -float(model.potential_energy(np.zeros(model.n)))
     if depth <= 0:
         raise ValueError(f"the model's `g` must be positive, got {model.g}")
