@@ -11,15 +11,17 @@ import pendulum_lab as pl
 from pendulum_lab import analysis
 from pendulum_lab.integrators import (
     GAUSS4_TABLEAU,
+    GAUSS8_TABLEAU,
     MAIN_METHODS,
     RK4_TABLEAU,
     ButcherTableau,
     fixed_point_status,
 )
+from pendulum_lab.simulate import hamiltonian_field
 
 DP = pl.double_pendulum(m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81)
 SP = pl.simple_pendulum(mass=1.0, length=1.0, g=9.81)
-SYMPLECTIC = ("semi_implicit_euler", "leapfrog", "glrk4")
+SYMPLECTIC = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8")
 NOT_SYMPLECTIC = ("explicit_euler", "rk4", "semi_implicit_euler_velocity", "leapfrog_velocity")
 
 
@@ -43,6 +45,22 @@ def test_gauss_legendre_tableau_is_the_reports_and_is_implicit():
     assert not GAUSS4_TABLEAU.explicit and RK4_TABLEAU.explicit
 
 
+def collocation_conditions(tableau, stages):
+    """Largest violation of B(2s) and C(s), the conditions that make collocation order 2s."""
+    a, b, c = tableau.a, tableau.b, tableau.c
+    quadrature = max(abs(b @ c ** (k - 1) - 1 / k) for k in range(1, 2 * stages + 1))
+    stage_order = max(np.max(np.abs(a @ c ** (k - 1) - c**k / k)) for k in range(1, stages + 1))
+    return max(quadrature, stage_order)
+
+
+def test_gauss_tableaus_are_collocation_of_order_2s():
+    assert collocation_conditions(GAUSS4_TABLEAU, 2) < 1e-15
+    assert collocation_conditions(GAUSS8_TABLEAU, 4) < 1e-14
+    assert GAUSS8_TABLEAU.order == 8 and GAUSS8_TABLEAU.stages == 4
+    # negative control: RK4 is order 4 but not a 4-stage collocation method
+    assert collocation_conditions(RK4_TABLEAU, 4) > 1e-3
+
+
 def test_inconsistent_tableau_is_rejected():
     with pytest.raises(ValueError, match="sum to 1"):
         ButcherTableau(a=[[0, 0], [0.5, 0]], b=[0.5, 0.6], c=[0, 0.5], order=2)
@@ -52,7 +70,8 @@ def test_inconsistent_tableau_is_rejected():
 
 def test_method_registry_properties():
     expected = {"explicit_euler": (1, False), "semi_implicit_euler": (1, True),
-                "leapfrog": (2, True), "rk4": (4, False), "glrk4": (4, True)}
+                "leapfrog": (2, True), "rk4": (4, False), "glrk4": (4, True),
+                "glrk8": (8, True)}
     for name, (order, symplectic) in expected.items():
         method = pl.METHODS[name]
         assert (method.order, method.symplectic) == (order, symplectic)
@@ -89,6 +108,19 @@ def test_observed_order_simple_pendulum(name, sp_reference):
     assert abs(result.slope - pl.METHODS[name].order) <= 0.15, result
 
 
+# Order 8 reaches round-off fast: larger steps, and a gentler start for the
+# double pendulum so that these steps are in the asymptotic regime.
+ORDER8_DTS = (0.125, 0.1, 0.0625, 0.05)
+
+
+@pytest.mark.parametrize("model, theta0", [(DP, [0.5, 0.6]), (SP, [1.2])])
+def test_observed_order_glrk8(model, theta0):
+    omega0 = np.zeros(model.n)
+    result = analysis.observed_order(model, "glrk8", theta0, omega0, 1.0, ORDER8_DTS)
+    assert abs(result.slope - 8) <= 0.3, result
+    assert result.errors[-1] > 1e-13  # the fit stays above round-off
+
+
 def test_velocity_leapfrog_is_only_first_order_on_the_double_pendulum(dp_reference):
     # The report's leapfrog on (theta, omega) evaluates a velocity-dependent
     # acceleration at a half-step Euler velocity: it loses an order.
@@ -121,7 +153,7 @@ def test_velocity_methods_are_symplectic_for_the_simple_pendulum():
 
 
 # ---------------------------------------------------------------- reversibility
-@pytest.mark.parametrize("name", ["leapfrog", "glrk4"])
+@pytest.mark.parametrize("name", ["leapfrog", "glrk4", "glrk8"])
 def test_symmetric_methods_are_reversible(name):
     assert analysis.reversibility_error(DP, name, Q0, P0, 0.05) <= 1e-12
 
@@ -135,10 +167,10 @@ def test_non_symmetric_methods_are_not_reversible(name):
 @pytest.fixture(scope="module")
 def long_runs():
     return {name: pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=1000.0, dt=0.01, method=name)
-            for name in ("glrk4", "leapfrog", "rk4")}
+            for name in ("glrk4", "glrk8", "leapfrog", "rk4")}
 
 
-@pytest.mark.parametrize("name", ["glrk4", "leapfrog"])
+@pytest.mark.parametrize("name", ["glrk4", "glrk8", "leapfrog"])
 def test_symplectic_energy_error_stays_bounded(long_runs, name):
     first, last = analysis.energy_growth(long_runs[name])
     assert last <= 3 * first, (first, last)
@@ -188,6 +220,20 @@ def test_stopping_rule_does_not_stop_on_a_small_but_shrinking_increment():
     assert tolerance_stop < 10
 
 
+def test_stopping_rule_stops_once_the_rest_is_below_half_an_ulp():
+    # x <- c + r (x - c) converges at rate r. With r = 1e-4 the increments are
+    # 1e-4, 1e-8, 1e-12, 1e-16: after the fourth the predicted rest is far below
+    # an ulp of c, so the rule stops there instead of waiting for a stall.
+    c = 0.7390851332151607
+    x, sweeps, status = iterate(lambda x: c + 1e-4 * (x - c), [c + 1.0])
+    assert status == 1 and sweeps <= 5
+    assert abs(x[0] - c) <= np.spacing(c)
+    # negative control: at rate 0.5 the rest is never below an ulp before the
+    # increments stall, so the rule needs many more sweeps
+    _, slow_sweeps, slow_status = iterate(lambda x: c + 0.5 * (x - c), [c + 1.0])
+    assert slow_status == 1 and slow_sweeps > 40
+
+
 def test_stopping_rule_reports_divergence_and_non_finite():
     _, sweeps, status = iterate(lambda x: 2.0 * x + 1.0, [1.0], max_sweeps=50)
     assert status == 0 and sweeps == 50  # never accepted
@@ -199,6 +245,41 @@ def test_stopping_rule_reports_divergence_and_non_finite():
 def test_glrk4_too_large_dt_raises_naming_step_and_time():
     with pytest.raises(pl.ConvergenceError, match=r"at step \d+ \(t = [0-9.]+"):
         pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=20.0, dt=0.6, method="glrk4")
+
+
+@pytest.mark.parametrize("name, tableau", [("glrk4", GAUSS4_TABLEAU), ("glrk8", GAUSS8_TABLEAU)])
+def test_gauss_step_solves_the_collocation_equations(name, tableau):
+    """The step equals the one whose stages SciPy solves independently.
+
+    A fast-moving state and a large step, where the stage equations are far
+    from their first guess; fsolve (the course report's solver) on the stage
+    equations in (theta, p) gives the reference.
+    """
+    from scipy.optimize import fsolve
+
+    field = hamiltonian_field(DP)
+    q, p, h = np.array([0.3, -1.0]), DP.momenta([0.3, -1.0], [4.0, -6.0]), 0.08
+    stages = tableau.stages
+
+    def f(y):
+        dq, dp = np.empty(2), np.empty(2)
+        field.hamilton(y[:2].copy(), y[2:].copy(), field.params, dq, dp)
+        return np.concatenate([dq, dp])
+
+    y = np.concatenate([q, p])
+
+    def residual(flat):
+        k = flat.reshape(stages, 4)
+        return (k - np.array([f(y + h * tableau.a[i] @ k) for i in range(stages)])).ravel()
+
+    slopes = fsolve(residual, np.tile(f(y), stages), xtol=1e-14)
+    assert np.max(np.abs(residual(slopes))) < 1e-11
+    expected = y + h * tableau.b @ slopes.reshape(stages, 4)
+    q1, p1 = pl.step(DP, name, q, p, h)
+    assert np.max(np.abs(np.concatenate([q1, p1]) - expected)) < 1e-12
+    # negative control: an explicit method of the same order is a different map
+    q_rk, p_rk = pl.step(DP, "rk4", q, p, h)
+    assert np.max(np.abs(np.concatenate([q_rk, p_rk]) - expected)) > 1e-6
 
 
 def test_symplectic_methods_are_explicit_for_the_separable_simple_pendulum():

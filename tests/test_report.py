@@ -11,7 +11,7 @@ from pendulum_lab import analysis, report
 
 T_END, DT = 2.0, 0.01
 METHODS = tuple(pl.METHODS)
-SYMPLECTIC_IN_P = ("semi_implicit_euler", "leapfrog", "glrk4")
+SYMPLECTIC_IN_P = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8")
 
 
 def parse_table(text):
@@ -181,7 +181,8 @@ def test_python_api_names_the_bad_argument(tmp_path):
         ("rk4", "def explicit_rk("),
         ("semi_implicit_euler", "def fixed_point_status("),
         ("leapfrog", "def fixed_point_status("),
-        ("glrk4", "def fixed_point_status("),
+        ("glrk4", "def implicit_rk("),
+        ("glrk8", "def fixed_point_status("),
     ],
 )
 def test_method_source_is_the_running_code_with_its_helpers(name, helper):

@@ -49,7 +49,9 @@ __all__ = [
     "Method",
     "explicit_rk",
     "fixed_point_status",
+    "gauss_legendre_tableau",
     "get_method",
+    "implicit_rk",
     "run",
 ]
 
@@ -118,18 +120,35 @@ RK4_TABLEAU = ButcherTableau(
     c=[0, 0.5, 0.5, 1],
     order=4,
 )
-_R3 = math.sqrt(3.0)
-# Two-stage Gauss-Legendre collocation (the course report, section 2.4.5).
-GAUSS4_TABLEAU = ButcherTableau(
-    a=[[1 / 4, 1 / 4 - _R3 / 6], [1 / 4 + _R3 / 6, 1 / 4]],
-    b=[1 / 2, 1 / 2],
-    c=[1 / 2 - _R3 / 6, 1 / 2 + _R3 / 6],
-    order=4,
-)
+
+
+def gauss_legendre_tableau(stages: int) -> ButcherTableau:
+    """The ``stages``-stage Gauss-Legendre collocation method (order ``2 stages``).
+
+    The nodes ``c`` are the zeros of the Legendre polynomial of degree
+    ``stages`` moved to [0, 1]; ``a_ij`` integrates the Lagrange polynomial
+    of node ``j`` from 0 to ``c_i`` and ``b_j`` from 0 to 1 [HLW, Sect. II.1.3].
+    """
+    x, _ = np.polynomial.legendre.leggauss(stages)
+    c = (x + 1.0) / 2.0
+    a, b = np.empty((stages, stages)), np.empty(stages)
+    for j in range(stages):
+        others = np.delete(c, j)
+        lagrange = np.polynomial.Polynomial.fromroots(others) / np.prod(c[j] - others)
+        integral = lagrange.integ()  # zero at t = 0
+        a[:, j], b[j] = integral(c), integral(1.0)
+    return ButcherTableau(a=a, b=b, c=c, order=2 * stages)
+
+
+# The course report's method (section 2.4.5): c = 1/2 -+ sqrt(3)/6, order 4.
+GAUSS4_TABLEAU = gauss_legendre_tableau(2)
+# Four stages, order 8: far fewer steps where high accuracy is wanted.
+GAUSS8_TABLEAU = gauss_legendre_tableau(4)
 # Numba freezes module-level arrays into the compiled code as constants.
 _EULER_A, _EULER_B = EULER_TABLEAU.a, EULER_TABLEAU.b
 _RK4_A, _RK4_B = RK4_TABLEAU.a, RK4_TABLEAU.b
-_GAUSS_A, _GAUSS_B = GAUSS4_TABLEAU.a, GAUSS4_TABLEAU.b
+_GAUSS4_A, _GAUSS4_B = GAUSS4_TABLEAU.a, GAUSS4_TABLEAU.b
+_GAUSS8_A, _GAUSS8_B = GAUSS8_TABLEAU.a, GAUSS8_TABLEAU.b
 
 # --------------------------------------------------------------------------- kernel types
 HamiltonFn = types.FunctionType(HAMILTON)
@@ -174,33 +193,52 @@ MAX_SWEEPS = 100
 # A stalled iteration counts as converged only if its last increment is this
 # small relative to the unknowns: stalling far from round-off means divergence.
 ROUNDOFF_TOLERANCE = 1e-11
+EPSILON = np.finfo(np.float64).eps
 
 
 @numba.njit(cache=True)
 def fixed_point_status(new, old, smallest):
-    """The stopping rule of every fixed-point iteration here, per component.
+    """The stopping rule of every implicit solve here, applied per component.
 
     ``new`` and ``old`` are successive iterates and ``smallest`` holds each
-    component's smallest increment so far (updated in place). Returns ``1``
-    when the iteration has reached round-off: no component's increment fell
-    below its smallest earlier one (increments only fluctuate now) and all are
-    tiny. Returns ``0`` to continue and ``-1`` if an iterate is not finite.
-    Unlike a tolerance on the max-norm, this cannot stop on a small but
-    still-shrinking increment, and needs no tolerance tuned to the problem.
+    component's smallest increment so far (updated in place). A component is
+    done when its increment did not fall below its smallest earlier one (it
+    only jitters at round-off now), or when the iteration's observed
+    contraction predicts that all its further corrections together stay below
+    half a unit in its last place. Returns ``1`` when every component is done
+    and all increments are tiny, ``0`` to continue, and ``-1`` if an iterate is
+    not finite. Unlike a tolerance, this cannot stop on a small but still
+    shrinking increment and needs no tuning to the problem; the prediction
+    saves the sweeps a plain stall test would spend at round-off.
     """
     new_flat, old_flat, smallest_flat = new.ravel(), old.ravel(), smallest.ravel()
-    stalled, small = True, True
+    # rate: the largest ratio of an increment to the one before it, over the
+    # components whose previous increment was well above round-off (below
+    # that, ratios are noise); unknown on the first sweep or if none qualifies
+    rate, measured, first, small = 0.0, False, False, True
+    worst = 0.0  # the largest relative increment among components still improving
     for i in range(new_flat.size):
         x = new_flat[i]
         if not math.isfinite(x):
             return -1
-        delta = abs(x - old_flat[i])
-        if delta < smallest_flat[i]:
-            stalled = False
-            smallest_flat[i] = delta
+        delta, previous = abs(x - old_flat[i]), smallest_flat[i]
         if delta > ROUNDOFF_TOLERANCE * (1.0 + abs(x)):
             small = False
-    return 1 if (stalled and small) else 0
+        if not math.isfinite(previous):
+            first = True
+        elif previous > 256.0 * EPSILON * abs(x):
+            rate, measured = max(rate, delta / previous), True
+        if delta < previous:
+            smallest_flat[i] = delta
+            if delta > 0.0:
+                worst = max(worst, delta / abs(x) if x != 0.0 else math.inf)
+    if not small:
+        return 0
+    if worst == 0.0:  # every component stalled or exactly unchanged
+        return 1
+    # the improving ones are done if rate / (1 - rate) * increment < half an ulp
+    done = measured and not first and rate < 1.0 and rate * worst <= 0.5 * EPSILON * (1.0 - rate)
+    return 1 if done else 0
 
 
 # --------------------------------------------------------------------------- explicit methods
@@ -315,38 +353,58 @@ def leapfrog_step(hamilton, acceleration, q, p, h, params, separable):
     return q1, p_half + 0.5 * h * dp, sweeps, calls + 1
 
 
-@jit_step
-def glrk4_step(hamilton, acceleration, q, p, h, params, separable):
-    """Two-stage Gauss-Legendre collocation: ``K_i = f(y + h sum_j a_ij K_j)``,
-    ``y1 = y + h sum_i b_i K_i``, the stages found by fixed-point iteration
-    from the guess ``K_i = f(y)``.
+@numba.njit(cache=True)
+def implicit_rk(hamilton, q, p, h, params, a, b):
+    """One step of the implicit Runge-Kutta method ``(a, b)`` for Hamilton's equations.
+
+    The stage slopes solve ``K_i = f(y + h sum_j a_ij K_j)``; they are found
+    by fixed-point iteration from the guess ``K_i = f(y)``, each sweep
+    re-evaluating every stage at the latest slopes, until
+    :func:`fixed_point_status` finds round-off. The step is
+    ``y1 = y + h sum_i b_i K_i``. Returns ``(q1, p1, sweeps, calls)``, with
+    ``sweeps = -1`` if the iteration did not converge.
     """
-    n = q.size
-    kq, kp = np.empty((2, n)), np.empty((2, n))
-    hamilton(q, p, params, kq[0], kp[0])
-    kq[1], kp[1] = kq[0], kp[0]
-    new_q, new_p = np.empty((2, n)), np.empty((2, n))
+    stages, n = b.size, q.size
+    slopes = np.empty((2, stages, n))  # slopes[0, i] = dq, slopes[1, i] = dp of stage i
+    hamilton(q, p, params, slopes[0, 0], slopes[1, 0])
+    for i in range(1, stages):
+        slopes[:, i] = slopes[:, 0]
+    new_slopes, smallest = np.empty((2, stages, n)), np.full((2, stages, n), np.inf)
     stage_q, stage_p = np.empty(n), np.empty(n)
-    smallest_q, smallest_p = np.full((2, n), np.inf), np.full((2, n), np.inf)
     sweeps, status = 0, 0
     while status == 0 and sweeps < MAX_SWEEPS:
         sweeps += 1
-        for i in range(2):
+        for i in range(stages):
             for m in range(n):
-                stage_q[m] = q[m] + h * (_GAUSS_A[i, 0] * kq[0, m] + _GAUSS_A[i, 1] * kq[1, m])
-                stage_p[m] = p[m] + h * (_GAUSS_A[i, 0] * kp[0, m] + _GAUSS_A[i, 1] * kp[1, m])
-            hamilton(stage_q, stage_p, params, new_q[i], new_p[i])
-        status_q = fixed_point_status(new_q, kq, smallest_q)
-        status_p = fixed_point_status(new_p, kp, smallest_p)
-        # converged when both halves are; -1 (not finite) wins over everything
-        status = -1 if min(status_q, status_p) < 0 else status_q * status_p
-        kq[:], kp[:] = new_q, new_p
-    calls = 1 + 2 * sweeps
+                sum_q, sum_p = 0.0, 0.0
+                for j in range(stages):
+                    sum_q += a[i, j] * slopes[0, j, m]
+                    sum_p += a[i, j] * slopes[1, j, m]
+                stage_q[m], stage_p[m] = q[m] + h * sum_q, p[m] + h * sum_p
+            hamilton(stage_q, stage_p, params, new_slopes[0, i], new_slopes[1, i])
+        status = fixed_point_status(new_slopes, slopes, smallest)
+        slopes, new_slopes = new_slopes, slopes  # the new iterate becomes the current one
+    calls = 1 + stages * sweeps
     if status != 1:
         return q, p, -1, calls
-    q1 = q + h * (_GAUSS_B[0] * kq[0] + _GAUSS_B[1] * kq[1])
-    p1 = p + h * (_GAUSS_B[0] * kp[0] + _GAUSS_B[1] * kp[1])
+    q1, p1 = q.copy(), p.copy()
+    for i in range(stages):
+        for m in range(n):
+            q1[m] += h * b[i] * slopes[0, i, m]
+            p1[m] += h * b[i] * slopes[1, i, m]
     return q1, p1, sweeps, calls
+
+
+@jit_step
+def glrk4_step(hamilton, acceleration, q, p, h, params, separable):
+    """Two-stage Gauss-Legendre collocation (order 4), solved by :func:`implicit_rk`."""
+    return implicit_rk(hamilton, q, p, h, params, _GAUSS4_A, _GAUSS4_B)
+
+
+@jit_step
+def glrk8_step(hamilton, acceleration, q, p, h, params, separable):
+    """Four-stage Gauss-Legendre collocation (order 8), solved by :func:`implicit_rk`."""
+    return implicit_rk(hamilton, q, p, h, params, _GAUSS8_A, _GAUSS8_B)
 
 
 # --------------------------------------------------------------------------- the report's methods
@@ -481,6 +539,8 @@ METHODS: dict[str, Method] = {
                "classical fourth-order Runge-Kutta", rk4_step),
         Method("glrk4", 4, True, True, "canonical",
                "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)", glrk4_step),
+        Method("glrk8", 8, True, True, "canonical",
+               "four-stage Gauss-Legendre collocation (order 8, implicit)", glrk8_step),
         Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
                "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
                semi_implicit_euler_velocity_step),

@@ -314,7 +314,7 @@ def run_report(
     dt : float
         Step size [s], ``> 0``.
     methods : sequence of str
-        Keys of :data:`pendulum_lab.METHODS`; all seven by default.
+        Keys of :data:`pendulum_lab.METHODS`; all of them by default.
     pendulums : sequence of str
         Keys of :data:`PENDULUMS`.
     progress : bool
@@ -394,7 +394,8 @@ def _summary_text(rows, failures, figures, out: Path, t_end, dt, elapsed) -> str
         "(Kanoun, Cowley, Ivachtchenko, MAT332, 2024).",
         "",
         "Columns: *observed order* is the fitted log-log slope of the error at t = 1 s "
-        f"against dt in {analysis.ORDER_DTS}, versus a DOP853 reference; "
+        f"against dt in {analysis.ORDER_DTS} ({analysis.HIGH_ORDER_DTS} for order 8), versus "
+        "a DOP853 reference; "
         "*max abs(dE)* in the first and last tenth of the run compares early and late "
         "energy errors (a ratio near 1 means bounded, a growing one drift); "
         "*symplecticity defect* is max |Psi^T J Psi - J| for the Jacobian Psi of one step "

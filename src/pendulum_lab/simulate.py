@@ -56,7 +56,7 @@ class Trajectory:
     method : Method
     dt : float
     mean_iterations : float
-        Mean implicit-solver sweeps per step (0 for explicit methods).
+        Mean implicit-solver iterations per step (0 for explicit methods).
     evaluations : int
         Vector-field evaluations (Hamilton's equations or the acceleration at
         one state), summed over the ensemble.
@@ -173,7 +173,7 @@ def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, n
     _advance(method, hamiltonian_field(model), q, y, dt, 1, 0, 2, unused, unused, stats)
     if np.any(stats[:, STATUS] == NOT_CONVERGED):
         raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
-                               f"in {MAX_SWEEPS} fixed-point sweeps (dt = {dt:g})")
+                               f"within {MAX_SWEEPS} iterations (dt = {dt:g})")
     if method.variables == "velocity":
         y = model.momenta(q, y)
     return q.reshape(shape), y.reshape(shape)
@@ -307,8 +307,8 @@ def simulate(
         at = int(stats[k, STEPS]) + 1
         member = f", ensemble member {np.unravel_index(k, batch_shape)}" if batch_shape else ""
         raise ConvergenceError(
-            f"{method.name}: the implicit equations did not converge in {MAX_SWEEPS} fixed-point "
-            f"sweeps at step {at} (t = {at * dt:.6g}, dt = {dt:g}{member}); use a smaller dt"
+            f"{method.name}: the implicit equations did not converge within {MAX_SWEEPS} "
+            f"iterations at step {at} (t = {at * dt:.6g}, dt = {dt:g}{member}); use a smaller dt"
         )
     blown = stats[:, STATUS] == NOT_FINITE
     completed = not np.any(blown)
