@@ -200,8 +200,8 @@ EPSILON = np.finfo(np.float64).eps
 def fixed_point_status(new, old, smallest):
     """The stopping rule of every implicit solve here, applied per component.
 
-    ``new`` and ``old`` are successive iterates and ``smallest`` holds each
-    component's smallest increment so far (updated in place). A component is
+    ``new`` and ``old`` are successive iterates (1-d arrays) and ``smallest``
+    holds each component's smallest increment so far (updated in place). A component is
     done when its increment did not fall below its smallest earlier one (it
     only jitters at round-off now), or when the iteration's observed
     contraction predicts that all its further corrections together stay below
@@ -211,17 +211,16 @@ def fixed_point_status(new, old, smallest):
     shrinking increment and needs no tuning to the problem; the prediction
     saves the sweeps a plain stall test would spend at round-off.
     """
-    new_flat, old_flat, smallest_flat = new.ravel(), old.ravel(), smallest.ravel()
     # rate: the largest ratio of an increment to the one before it, over the
     # components whose previous increment was well above round-off (below
     # that, ratios are noise); unknown on the first sweep or if none qualifies
     rate, measured, first, small = 0.0, False, False, True
     worst = 0.0  # the largest relative increment among components still improving
-    for i in range(new_flat.size):
-        x = new_flat[i]
+    for i in range(new.size):
+        x = new[i]
         if not math.isfinite(x):
             return -1
-        delta, previous = abs(x - old_flat[i]), smallest_flat[i]
+        delta, previous = abs(x - old[i]), smallest[i]
         if delta > ROUNDOFF_TOLERANCE * (1.0 + abs(x)):
             small = False
         if not math.isfinite(previous):
@@ -229,7 +228,7 @@ def fixed_point_status(new, old, smallest):
         elif previous > 256.0 * EPSILON * abs(x):
             rate, measured = max(rate, delta / previous), True
         if delta < previous:
-            smallest_flat[i] = delta
+            smallest[i] = delta
             if delta > 0.0:
                 worst = max(worst, delta / abs(x) if x != 0.0 else math.inf)
     if not small:
@@ -365,33 +364,40 @@ def implicit_rk(hamilton, q, p, h, params, a, b):
     ``sweeps = -1`` if the iteration did not converge.
     """
     stages, n = b.size, q.size
-    slopes = np.empty((2, stages, n))  # slopes[0, i] = dq, slopes[1, i] = dp of stage i
-    hamilton(q, p, params, slopes[0, 0], slopes[1, 0])
+    # Two iterates in one block of memory: slopes[k, 0, i] and slopes[k, 1, i]
+    # are dq and dp of stage i in iterate k, and flat[k] is iterate k as one
+    # vector for the stopping rule (views made once: reshaping costs more
+    # than a sweep's arithmetic).
+    block = np.empty(2 * 2 * stages * n)
+    slopes, flat = block.reshape((2, 2, stages, n)), block.reshape((2, 2 * stages * n))
+    current = 0
+    hamilton(q, p, params, slopes[current, 0, 0], slopes[current, 1, 0])
     for i in range(1, stages):
-        slopes[:, i] = slopes[:, 0]
-    new_slopes, smallest = np.empty((2, stages, n)), np.full((2, stages, n), np.inf)
+        slopes[current, :, i] = slopes[current, :, 0]
+    smallest = np.full(2 * stages * n, np.inf)
     stage_q, stage_p = np.empty(n), np.empty(n)
     sweeps, status = 0, 0
     while status == 0 and sweeps < MAX_SWEEPS:
         sweeps += 1
+        new = 1 - current
         for i in range(stages):
             for m in range(n):
                 sum_q, sum_p = 0.0, 0.0
                 for j in range(stages):
-                    sum_q += a[i, j] * slopes[0, j, m]
-                    sum_p += a[i, j] * slopes[1, j, m]
+                    sum_q += a[i, j] * slopes[current, 0, j, m]
+                    sum_p += a[i, j] * slopes[current, 1, j, m]
                 stage_q[m], stage_p[m] = q[m] + h * sum_q, p[m] + h * sum_p
-            hamilton(stage_q, stage_p, params, new_slopes[0, i], new_slopes[1, i])
-        status = fixed_point_status(new_slopes, slopes, smallest)
-        slopes, new_slopes = new_slopes, slopes  # the new iterate becomes the current one
+            hamilton(stage_q, stage_p, params, slopes[new, 0, i], slopes[new, 1, i])
+        status = fixed_point_status(flat[new], flat[current], smallest)
+        current = new
     calls = 1 + stages * sweeps
     if status != 1:
         return q, p, -1, calls
     q1, p1 = q.copy(), p.copy()
     for i in range(stages):
         for m in range(n):
-            q1[m] += h * b[i] * slopes[0, i, m]
-            p1[m] += h * b[i] * slopes[1, i, m]
+            q1[m] += h * b[i] * slopes[current, 0, i, m]
+            p1[m] += h * b[i] * slopes[current, 1, i, m]
     return q1, p1, sweeps, calls
 
 
