@@ -81,8 +81,13 @@ def _single(traj: Trajectory) -> Trajectory:
     return traj
 
 
+_SUBSCRIPTS = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+
 def _arm_label(i: int, n: int) -> str:
-    return "" if n == 1 else f"$_{i + 1}$"
+    # Unicode subscripts, not mathtext: mathtext costs milliseconds per label
+    # on every redraw of a live explorer.
+    return "" if n == 1 else str(i + 1).translate(_SUBSCRIPTS)
 
 
 def wrap_angle(theta):
@@ -147,7 +152,7 @@ def plot_angles(traj: Trajectory, ax: Axes | None = None) -> Figure:
     ax = _axes(ax)
     n = traj.theta.shape[1]
     for i in range(n):
-        ax.plot(traj.t, traj.theta[:, i], label=rf"$\theta${_arm_label(i, n)}")
+        ax.plot(traj.t, traj.theta[:, i], label=f"θ{_arm_label(i, n)}")
     ax.set(xlabel="t (s)", ylabel="angle (rad)", title="Angles")
     if n > 1:
         ax.legend(loc="upper right", fontsize="small")
@@ -176,10 +181,10 @@ def plot_phase(traj: Trajectory, ax: Axes | None = None, arm: int | None = None)
         (line,) = ax.plot(x, y, lw=0.8, label=f"arm {i + 1}")
         ax.plot(x[0], y[0], "o", color=line.get_color(), ms=5)
     single_arm = len(arms) == 1 and n > 1
-    sub = _arm_label(arms[0], n) if len(arms) == 1 else "$_i$"
+    sub = _arm_label(arms[0], n) if len(arms) == 1 else "ᵢ"
     ax.set(
-        xlabel=rf"$\theta${sub} (rad)",
-        ylabel=rf"$\omega${sub} (rad/s)",
+        xlabel=f"θ{sub} (rad)",
+        ylabel=f"ω{sub} (rad/s)",
         title=f"Arm {arms[0] + 1}" if single_arm else "Phase space",
         xlim=(-np.pi, np.pi),
     )
@@ -288,8 +293,8 @@ def plot_phase_portrait(
         ax.plot(x, y, color="black", lw=2.2, label="trajectory")
         ax.plot(x[0], y[0], "o", color="gold", mec="black", ms=9, zorder=5)
     ax.set(
-        xlabel=r"$\theta$ (rad)",
-        ylabel=r"$\omega$ (rad/s)",
+        xlabel="θ (rad)",
+        ylabel="ω (rad/s)",
         xlim=(-np.pi, np.pi),
         ylim=(-omega_max, omega_max),
         title="Phase portrait of the simple pendulum",
@@ -362,7 +367,7 @@ def plot_linear_vs_nonlinear(
                 traj.t,
                 data[:, i],
                 color=f"C{i}",
-                label=rf"$\theta${_arm_label(i, n)} $- \theta${_arm_label(i, n)}$^*$",
+                label=f"θ{_arm_label(i, n)} − θ{_arm_label(i, n)}*",
             )
         ax.set(xlabel="t (s)", title=f"{title} near {eq.name}")
         ax.legend(loc="upper left", fontsize="small")
@@ -419,7 +424,7 @@ def plot_spectrum(
         ax.axvline(mark, color="tab:red", ls="--", lw=1, label="predicted" if k == 0 else None)
     top = 2.0 * max(marks) if len(marks) else omega[-1]
     ax.set(
-        xlabel=r"angular frequency $\omega$ (rad/s)",
+        xlabel="angular frequency ω (rad/s)",
         ylabel="power (normalised)",
         xlim=(0, top if omega_max is None else omega_max),
         ylim=(1e-8, 2),
