@@ -430,9 +430,9 @@ __all__ += [
     "dop853_work_precision",
     "markdown_table",
     "method_source",
+    "order_steps",
     "pendulum_name",
     "windowed_energy_error",
-    "order_steps",
     "work_precision",
 ]
 

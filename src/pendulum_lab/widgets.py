@@ -398,13 +398,13 @@ class Explorer(Instrument):
             _remove_data(ax)
         for ax, (_, panel) in zip(axes, self.panels):
             panel(ax, self.trajectory, self.model)
-            _few_ticks(ax)
+            _cheap_to_redraw(ax)
 
     def _draw(self, figure):
         for k, (_, panel) in enumerate(self.panels):
             ax = figure.add_subplot(self._rows, self._cols, k + 1)
             panel(ax, self.trajectory, self.model)
-            _few_ticks(ax)
+            _cheap_to_redraw(ax)
         figure.subplots_adjust(
             left=0.07,
             right=0.985,
@@ -456,7 +456,7 @@ def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumMode
     return model, traj
 
 
-def _few_ticks(ax) -> None:
+def _cheap_to_redraw(ax) -> None:
     """At most about five ticks on each linear axis of a live panel, and a fixed title height.
 
     Text is most of the cost of a redraw, and tick labels are most of the
