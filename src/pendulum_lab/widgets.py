@@ -35,6 +35,7 @@ import warnings
 from collections.abc import Callable, Sequence
 
 import ipywidgets as widgets
+import matplotlib as mpl
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -338,7 +339,10 @@ class Instrument:
         self._draw(self.figure)
 
     def _render(self) -> None:
-        self._canvas.draw()
+        # FreeType's hinting of every glyph is a fifth of a redraw; unhinted
+        # text looks the same at this size and resolution.
+        with mpl.rc_context({"text.hinting": "none"}):
+            self._canvas.draw()
         self._image.value = png_bytes(np.asarray(self._canvas.buffer_rgba()))
 
     def _ipython_display_(self) -> None:
