@@ -81,12 +81,17 @@ def test_batches_give_the_same_numbers_as_single_states():
 
 
 @pytest.mark.parametrize("n", [3, 4, 5])
-def test_n_pendulum_glrk4_energy_error_is_fourth_order(n):
+@pytest.mark.parametrize(
+    "method, dts, bounds",
+    # halving dt divides the energy error by about 2**order: 16 and 256
+    [("glrk4", (0.01, 0.005), (12, 20)), ("glrk8", (0.02, 0.01), (180, 400))],
+)
+def test_n_pendulum_gauss_energy_error_has_the_methods_order(n, method, dts, bounds):
     theta0 = np.linspace(1.0, -0.5, n)
     errors = [np.max(np.abs(pl.simulate(pl.n_pendulum(n), theta0, np.zeros(n), t_end=2.0, dt=dt,
-                                        method="glrk4").energy_error))
-              for dt in (0.01, 0.005)]
-    assert 12 < errors[0] / errors[1] < 20, errors
+                                        method=method).energy_error))
+              for dt in dts]
+    assert bounds[0] < errors[0] / errors[1] < bounds[1], errors
 
 
 def test_inputs_are_not_modified():
