@@ -201,11 +201,11 @@ def fixed_point_status(new, old, smallest):
     """The stopping rule of every implicit solve here, applied per component.
 
     ``new`` and ``old`` are successive iterates (1-d arrays) and ``smallest``
-    holds each component's smallest increment so far (updated in place). A component is
-    done when its increment did not fall below its smallest earlier one (it
-    only jitters at round-off now), or when the iteration's observed
-    contraction predicts that all its further corrections together stay below
-    half a unit in its last place. Returns ``1`` when every component is done
+    holds each component's smallest increment so far (updated in place). A
+    component is done when its increment did not fall below its smallest
+    earlier one (it only jitters at round-off now), or when the iteration's
+    observed contraction predicts that all its further corrections together
+    stay below half a unit in its last place. Returns ``1`` when every component is done
     and all increments are tiny, ``0`` to continue, and ``-1`` if an iterate is
     not finite. Unlike a tolerance, this cannot stop on a small but still
     shrinking increment and needs no tuning to the problem; the prediction
