@@ -51,6 +51,7 @@ __all__ = [
     "fixed_point_status",
     "gauss_legendre_tableau",
     "get_method",
+    "implicit_kick",
     "implicit_rk",
     "run",
 ]
@@ -284,6 +285,29 @@ def rk4_step(hamilton, acceleration, q, p, h, params, separable):
 
 
 # --------------------------------------------------------------------------- symplectic methods
+@numba.njit(cache=True)
+def implicit_kick(hamilton, q, p, k, params, separable, dq, dp):
+    """Solve ``p_k = p - k H_q(q, p_k)`` for ``p_k``: the implicit momentum update.
+
+    Starts from ``p + k dp``, so ``dp`` must hold ``-H_q(q, p)`` on entry; the
+    guess is exact when ``H`` is separable. Otherwise iterates
+    ``p_k <- p + k dp(q, p_k)`` until :func:`fixed_point_status` finds
+    round-off. ``dq``, ``dp`` are workspace. Returns ``(p_k, sweeps)``, with
+    ``sweeps = -1`` if the iteration did not converge (after ``MAX_SWEEPS``).
+    """
+    p_k = p + k * dp
+    if separable:
+        return p_k, 0
+    smallest, status, sweeps = np.full(p.size, np.inf), 0, 0
+    while status == 0 and sweeps < MAX_SWEEPS:
+        sweeps += 1
+        hamilton(q, p_k, params, dq, dp)
+        p_new = p + k * dp
+        status = fixed_point_status(p_new, p_k, smallest)
+        p_k = p_new
+    return p_k, (sweeps if status == 1 else -1)
+
+
 @jit_step
 def semi_implicit_euler_step(hamilton, acceleration, q, p, h, params, separable):
     """Symplectic Euler for a general ``H(q, p)``:
@@ -293,21 +317,11 @@ def semi_implicit_euler_step(hamilton, acceleration, q, p, h, params, separable)
     """
     dq, dp = np.empty_like(q), np.empty_like(p)
     hamilton(q, p, params, dq, dp)
-    p1 = p + h * dp  # exact when H is separable, else the first guess
-    calls, sweeps = 1, 0
-    if not separable:
-        smallest, status = np.full(p.size, np.inf), 0
-        while status == 0 and sweeps < MAX_SWEEPS:
-            sweeps += 1
-            hamilton(q, p1, params, dq, dp)
-            p_new = p + h * dp
-            status = fixed_point_status(p_new, p1, smallest)
-            p1 = p_new
-        calls += sweeps
-        if status != 1:
-            return q, p, -1, calls
+    p1, sweeps = implicit_kick(hamilton, q, p, h, params, separable, dq, dp)
+    if sweeps < 0:
+        return q, p, -1, 1 + MAX_SWEEPS
     hamilton(q, p1, params, dq, dp)
-    return q + h * dq, p1, sweeps, calls + 1
+    return q + h * dq, p1, sweeps, sweeps + 2
 
 
 @jit_step
@@ -320,19 +334,10 @@ def leapfrog_step(hamilton, acceleration, q, p, h, params, separable):
     """
     dq, dp = np.empty_like(q), np.empty_like(p)
     hamilton(q, p, params, dq, dp)
-    p_half = p + 0.5 * h * dp
-    calls, sweeps = 1, 0
-    if not separable:
-        smallest, status = np.full(p.size, np.inf), 0
-        while status == 0 and sweeps < MAX_SWEEPS:
-            sweeps += 1
-            hamilton(q, p_half, params, dq, dp)
-            p_new = p + 0.5 * h * dp
-            status = fixed_point_status(p_new, p_half, smallest)
-            p_half = p_new
-        calls += sweeps
-        if status != 1:
-            return q, p, -1, calls
+    p_half, sweeps = implicit_kick(hamilton, q, p, 0.5 * h, params, separable, dq, dp)
+    if sweeps < 0:
+        return q, p, -1, 1 + MAX_SWEEPS
+    calls = 1 + sweeps
     hamilton(q, p_half, params, dq, dp)
     drift = q + 0.5 * h * dq
     q1 = q + h * dq  # exact when H is separable, else the first guess
