@@ -171,16 +171,8 @@ class PendulumScene:
             1, 2, width_ratios=(1, 1.6), left=0.07, right=0.98, bottom=0.15, top=0.86, wspace=0.2
         )
         chain = figure.add_subplot(grid[0])
-        reach = 1.08 * sum(model.lengths)
-        chain.set(
-            xlim=(-reach, reach),
-            ylim=(-reach, reach),
-            aspect="equal",
-            xlabel="x (m)",
-            ylabel="y (m)",
-        )
+        plotting.chain_frame(chain, model, margin=1.08)
         chain.set_title(f"{traj.method.name}, dt = {traj.dt:g} s", fontsize="medium")
-        chain.plot([0], [0], "s", color="black", ms=6, zorder=4)
         self.trail_line = chain.plot([], [], color=TRAIL_COLOUR, lw=1.0, alpha=0.6)[0]
         self.rods = chain.plot([], [], color="0.25", lw=2.5, zorder=2)[0]
         self.bobs = chain.plot(

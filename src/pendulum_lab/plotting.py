@@ -29,6 +29,7 @@ from .simulate import Trajectory
 
 __all__ = [
     "PANELS",
+    "chain_frame",
     "draw_pendulum",
     "new_figure",
     "plot_angles",
@@ -319,7 +320,6 @@ def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=Non
     if theta.shape != (model.n,):
         raise ValueError(f"`theta` must have shape ({model.n},), got {theta.shape}")
     ax = _axes(ax, width=4.0, height=4.0)
-    reach = 1.1 * sum(model.lengths)
     if trail is not None:
         tx, ty = model.positions(np.asarray(trail, dtype=float))
         ax.plot(tx[:, -1], ty[:, -1], color="tab:purple", lw=0.7, alpha=0.5)
@@ -327,16 +327,18 @@ def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=Non
     ax.plot(np.r_[0.0, x], np.r_[0.0, y], color="0.25", lw=2.5, zorder=2)
     sizes = 120 * np.asarray(model.masses) / max(model.masses)
     ax.scatter(x, y, s=sizes, color="tab:red", edgecolor="black", zorder=3)
-    ax.plot([0], [0], "s", color="black", ms=6, zorder=4)
-    ax.set(
-        xlim=(-reach, reach),
-        ylim=(-reach, reach),
-        aspect="equal",
-        xlabel="x (m)",
-        ylabel="y (m)",
-        title="Configuration",
-    )
+    chain_frame(ax, model)
+    ax.set_title("Configuration")
     return ax.figure
+
+
+def chain_frame(ax: Axes, model: PendulumModel, margin: float = 1.1) -> None:
+    """Square axes in metres reaching ``margin`` times the chain's length, and the pivot."""
+    reach = margin * sum(model.lengths)
+    ax.set(
+        xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel="x (m)", ylabel="y (m)"
+    )
+    ax.plot([0], [0], "s", color="black", ms=6, zorder=4)
 
 
 # --------------------------------------------------------------------------- analyses
