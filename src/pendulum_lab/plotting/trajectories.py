@@ -1,0 +1,426 @@
+"""Figures of trajectories and models: energies, angles, phase space, the chain itself.
+
+Angles in phase plots are wrapped into ``(-pi, pi]`` and lines are broken
+where a rotating link jumps from ``pi`` to ``-pi``.
+
+:data:`PANELS` names the single-axes drawings the explorers in
+:mod:`pendulum_lab.widgets` can show; each is a callable
+``(ax, trajectory, model) -> None``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from .. import _validation as check
+from ..analysis import equilibrium_angles, exact_period, find_equilibrium, linearized_solution
+from ..analysis import spectrum as power_spectrum
+from ..model import PendulumModel
+from ..simulate import Trajectory
+from .figures import (
+    KINETIC,
+    LIBRATION,
+    POTENTIAL,
+    ROTATION,
+    SEPARATRIX,
+    TOTAL,
+    broken_at_wraps,
+    get_axes,
+    link_label,
+    new_figure,
+    single_trajectory,
+)
+
+__all__ = [
+    "PANELS",
+    "chain_frame",
+    "draw_pendulum",
+    "plot_angles",
+    "plot_energy",
+    "plot_energy_error",
+    "plot_linear_vs_nonlinear",
+    "plot_link_projections",
+    "plot_period_vs_amplitude",
+    "plot_phase",
+    "plot_phase_portrait",
+    "plot_spectrum",
+]
+
+
+# --------------------------------------------------------------------------- time series
+def plot_energy(traj: Trajectory, ax: Axes | None = None) -> Figure:
+    """Kinetic, potential and total energy [J] against time.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> traj = pl.simulate(pl.simple_pendulum(), [1.0], [0.0], t_end=1.0, dt=0.01)
+    >>> fig = plot_energy(traj)
+    >>> [line.get_label() for line in fig.axes[0].lines]
+    ['kinetic T', 'potential V', 'total E = T + V']
+    """
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
+    ax.plot(traj.t, traj.kinetic, color=KINETIC, label="kinetic T")
+    ax.plot(traj.t, traj.potential, color=POTENTIAL, label="potential V")
+    ax.plot(traj.t, traj.energy, color=TOTAL, lw=2, label="total E = T + V")
+    ax.set(
+        xlabel="t (s)",
+        ylabel="energy (J)",
+        title=f"Energy ({traj.method.name}, dt = {traj.dt:g} s)",
+    )
+    ax.legend(loc="upper right", fontsize="small")
+    return ax.figure
+
+
+def plot_energy_error(traj: Trajectory, ax: Axes | None = None, relative: bool = True) -> Figure:
+    """``|E(t) - E(0)|`` (relative to ``|E(0)|`` by default) on a log scale.
+
+    Exact zeros (the first sample) are not drawn: a log axis cannot show them.
+    """
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
+    error = np.abs(traj.relative_energy_error if relative else traj.energy_error)
+    shown = np.where(error > 0, error, np.nan)
+    ax.plot(traj.t, shown, color=TOTAL, lw=1)
+    if np.any(np.isfinite(shown)):
+        ax.set_yscale("log")
+    ylabel = "|E - E(0)| / |E(0)|" if relative else "|E - E(0)| (J)"
+    ax.set(xlabel="t (s)", ylabel=ylabel, title=f"Energy error ({traj.method.name})")
+    return ax.figure
+
+
+def plot_angles(traj: Trajectory, ax: Axes | None = None) -> Figure:
+    """Each angle ``theta_i(t)`` [rad] (not wrapped: a full turn adds 2 pi)."""
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
+    n = traj.theta.shape[1]
+    for i in range(n):
+        ax.plot(traj.t, traj.theta[:, i], label=f"θ{link_label(i, n)}")
+    ax.set(xlabel="t (s)", ylabel="angle (rad)", title="Angles")
+    if n > 1:
+        ax.legend(loc="upper right", fontsize="small")
+    return ax.figure
+
+
+# --------------------------------------------------------------------------- phase space
+def plot_phase(traj: Trajectory, ax: Axes | None = None, link: int | None = None) -> Figure:
+    """Phase-space projections ``(theta_i, omega_i)``, angles wrapped into ``(-pi, pi]``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+    ax : Axes, optional
+    link : int, optional
+        Draw only this link (0-based); by default all links, overlaid.
+    """
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
+    n = traj.theta.shape[1]
+    links = range(n) if link is None else [check.index_below("link", link, n)]
+    for i in links:
+        x, y = broken_at_wraps(traj.theta[:, i], traj.omega[:, i])
+        (line,) = ax.plot(x, y, lw=0.8, label=f"arm {i + 1}")
+        ax.plot(x[0], y[0], "o", color=line.get_color(), ms=5)
+    single_link = len(links) == 1 and n > 1
+    sub = link_label(links[0], n) if len(links) == 1 else "ᵢ"
+    ax.set(
+        xlabel=f"θ{sub} (rad)",
+        ylabel=f"ω{sub} (rad/s)",
+        title=f"Arm {links[0] + 1}" if single_link else "Phase space",
+        xlim=(-np.pi, np.pi),
+    )
+    if len(links) > 1:
+        ax.legend(loc="upper right", fontsize="small")
+    return ax.figure
+
+
+def plot_link_projections(traj: Trajectory, axes=None) -> Figure:
+    """One panel per link: the projection ``(theta_i, omega_i)`` of the trajectory.
+
+    For the double pendulum the motion lives in a 4-dimensional phase space;
+    each panel is a shadow of it, so curves may cross themselves.
+
+    Parameters
+    ----------
+    traj : Trajectory
+    axes : sequence of Axes, optional
+        ``n`` axes; by default a new row of ``n`` panels.
+    """
+    traj = single_trajectory(traj)
+    n = traj.theta.shape[1]
+    if axes is None:
+        axes = np.atleast_1d(new_figure(1, n, width=4.0 * n, height=3.6)[1])
+    if len(axes) != n:
+        raise ValueError(f"`axes` must hold {n} Axes (one per link), got {len(axes)}")
+    for i, ax in enumerate(axes):
+        plot_phase(traj, ax=ax, link=i)
+    return axes[0].figure
+
+
+def plot_phase_portrait(
+    model: PendulumModel,
+    ax: Axes | None = None,
+    *,
+    trajectory: Trajectory | None = None,
+    omega_max: float | None = None,
+    libration_levels: int = 5,
+    rotation_levels: int = 3,
+) -> Figure:
+    """Phase portrait of the simple pendulum: level sets of ``H(theta, omega)``.
+
+    Librations (closed curves around the bottom, ``E < m g l``) are blue,
+    rotations (``E > m g l``) green, and the separatrix ``E = m g l`` through
+    the upright saddle red. The center at ``(0, 0)`` and the saddles at
+    ``(+-pi, 0)`` are marked. A ``trajectory`` is drawn on top (thick, with its
+    start marked).
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A simple pendulum.
+    omega_max : float, optional
+        Half-height of the window [rad/s]; default 1.6 times the separatrix's
+        top speed ``2 sqrt(g / l)``.
+    libration_levels, rotation_levels : int
+        How many level sets of each kind to draw.
+    """
+    if not isinstance(model, PendulumModel) or model.n != 1:
+        raise ValueError(
+            "`model` must be a simple pendulum (n = 1) for a phase portrait; "
+            "for more links use plot_link_projections"
+        )
+    ax = get_axes(ax)
+    mass, length, g = model.masses[0], model.lengths[0], model.g
+    top_speed = 2.0 * np.sqrt(abs(g) / length)
+    omega_max = 1.6 * top_speed if omega_max is None else float(omega_max)
+    theta = np.linspace(-np.pi, np.pi, 401)
+    omega = np.linspace(-omega_max, omega_max, 401)
+    big_theta, big_omega = np.meshgrid(theta, omega)
+    energy = model.energy(big_theta[..., None], big_omega[..., None])
+    e_bottom, e_sep = -mass * g * length, mass * g * length
+    e_top = float(energy.max())
+    inner = np.linspace(e_bottom, e_sep, libration_levels + 2)[1:-1]
+    outer = np.linspace(e_sep, e_top, rotation_levels + 2)[1:-1]
+    style = {"linestyles": "solid", "linewidths": 0.9}
+    ax.contour(big_theta, big_omega, energy, levels=inner, colors=LIBRATION, **style)
+    if len(outer):
+        ax.contour(big_theta, big_omega, energy, levels=outer, colors=ROTATION, **style)
+    ax.contour(
+        big_theta,
+        big_omega,
+        energy,
+        levels=[e_sep],
+        colors=SEPARATRIX,
+        linestyles="solid",
+        linewidths=2,
+    )
+    ax.plot([0], [0], "o", color="black", ms=6)
+    ax.annotate("center", (0, 0), xytext=(4, -12), textcoords="offset points", fontsize="small")
+    ax.plot([-np.pi, np.pi], [0, 0], "X", color=SEPARATRIX, ms=9, clip_on=False)
+    ax.annotate(
+        "saddle",
+        (-np.pi, 0),
+        xytext=(6, 6),
+        textcoords="offset points",
+        fontsize="small",
+        color=SEPARATRIX,
+    )
+    ax.plot([], [], color=LIBRATION, label="libration")
+    ax.plot([], [], color=ROTATION, label="rotation")
+    ax.plot([], [], color=SEPARATRIX, lw=2, label="separatrix")
+    if trajectory is not None:
+        traj = single_trajectory(trajectory)
+        x, y = broken_at_wraps(traj.theta[:, 0], traj.omega[:, 0])
+        ax.plot(x, y, color="black", lw=2.2, label="trajectory")
+        ax.plot(x[0], y[0], "o", color="gold", mec="black", ms=9, zorder=5)
+    ax.set(
+        xlabel="θ (rad)",
+        ylabel="ω (rad/s)",
+        xlim=(-np.pi, np.pi),
+        ylim=(-omega_max, omega_max),
+        title="Phase portrait of the simple pendulum",
+    )
+    ax.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
+    return ax.figure
+
+
+# --------------------------------------------------------------------------- configuration
+def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=None) -> Figure:
+    """The chain at angles ``theta``: rods, bobs (area proportional to mass), pivot.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta : array_like, shape (n,)
+    ax : Axes, optional
+    trail : array_like, shape (N, n), optional
+        Earlier angles; the path of the last bob is drawn faintly.
+    """
+    theta = np.asarray(theta, dtype=float)
+    if theta.shape != (model.n,):
+        raise ValueError(f"`theta` must have shape ({model.n},), got {theta.shape}")
+    ax = get_axes(ax, width=4.0, height=4.0)
+    if trail is not None:
+        tx, ty = model.positions(np.asarray(trail, dtype=float))
+        ax.plot(tx[:, -1], ty[:, -1], color="tab:purple", lw=0.7, alpha=0.5)
+    x, y = model.positions(theta)
+    ax.plot(np.r_[0.0, x], np.r_[0.0, y], color="0.25", lw=2.5, zorder=2)
+    sizes = 120 * np.asarray(model.masses) / max(model.masses)
+    ax.scatter(x, y, s=sizes, color="tab:red", edgecolor="black", zorder=3)
+    chain_frame(ax, model)
+    ax.set_title("Configuration")
+    return ax.figure
+
+
+def chain_frame(ax: Axes, model: PendulumModel, margin: float = 1.1) -> None:
+    """Square axes in metres reaching ``margin`` times the chain's length, and the pivot."""
+    reach = margin * sum(model.lengths)
+    ax.set(
+        xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel="x (m)", ylabel="y (m)"
+    )
+    ax.plot([0], [0], "s", color="black", ms=6, zorder=4)
+
+
+# --------------------------------------------------------------------------- analyses
+def plot_linear_vs_nonlinear(
+    model: PendulumModel, equilibrium, traj: Trajectory, axes=None, clip: float = np.pi
+) -> Figure:
+    """Linearised (left) and nonlinear (right) motion near an equilibrium, side by side.
+
+    Both panels show the offsets ``theta_i(t) - theta_i*`` with the same axes.
+    The linear solution :func:`~pendulum_lab.analysis.linearized_solution`
+    starts from the trajectory's initial state; it is cut where an offset
+    exceeds ``clip`` (near a saddle it grows exponentially and would otherwise
+    flatten the nonlinear curve).
+    """
+    traj = single_trajectory(traj)
+    eq = find_equilibrium(model, equilibrium)
+    if axes is None:
+        axes = new_figure(1, 2, width=10.0, height=3.6, sharey=True)[1]
+    angles = equilibrium_angles(model, eq)
+    linear, _ = linearized_solution(model, traj.theta[0], traj.omega[0], t=traj.t,
+                                    equilibrium=eq)
+    linear = linear - angles
+    linear[np.maximum.accumulate(np.any(np.abs(linear) > clip, axis=1))] = np.nan
+    offsets = traj.theta - angles
+    n = model.n
+    for ax, data, title in zip(axes, (linear, offsets), ("linearised", "nonlinear")):
+        for i in range(n):
+            ax.plot(
+                traj.t,
+                data[:, i],
+                color=f"C{i}",
+                label=f"θ{link_label(i, n)} − θ{link_label(i, n)}*",
+            )
+        ax.set(xlabel="t (s)", title=f"{title} near {eq.name}")
+        ax.legend(loc="upper left", fontsize="small")
+    axes[0].set_ylabel("offset from equilibrium (rad)")
+    return axes[0].figure
+
+
+def plot_period_vs_amplitude(
+    model: PendulumModel, amplitudes, measured, ax: Axes | None = None
+) -> Figure:
+    """Measured periods (markers) against the exact elliptic-integral period (line).
+
+    The dashed line is the small-angle period ``2 pi sqrt(l / g)``.
+    """
+    ax = get_axes(ax)
+    dense = np.linspace(0.0, 0.995 * np.pi, 400)
+    ax.plot(
+        dense,
+        exact_period(model, dense),
+        color="black",
+        label=r"exact $4\sqrt{l/g}\,K(\sin^2(\theta_0/2))$",
+    )
+    ax.axhline(
+        2 * np.pi * np.sqrt(model.lengths[0] / model.g),
+        color="0.5",
+        ls="--",
+        label=r"small angle $2\pi\sqrt{l/g}$",
+    )
+    ax.plot(amplitudes, measured, "o", color="tab:red", label="measured (simulation)")
+    upper = 1.3 * float(np.max(measured))
+    ax.set(
+        xlabel=r"amplitude $\theta_0$ (rad)",
+        ylabel="period (s)",
+        ylim=(0, upper),
+        title="Period against amplitude",
+    )
+    ax.legend(loc="upper left", fontsize="small")
+    return ax.figure
+
+
+def plot_spectrum(
+    traj: Trajectory,
+    ax: Axes | None = None,
+    marks=(),
+    link: int | None = None,
+    omega_max: float | None = None,
+) -> Figure:
+    """Power spectrum of the angles (log scale) with vertical lines at ``marks`` [rad/s]."""
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
+    omega, power = power_spectrum(traj, link=link)
+    ax.semilogy(omega, np.maximum(power, 1e-16), color="black", lw=1)
+    for k, mark in enumerate(marks):
+        ax.axvline(mark, color="tab:red", ls="--", lw=1, label="predicted" if k == 0 else None)
+    top = 2.0 * max(marks) if len(marks) else omega[-1]
+    ax.set(
+        xlabel="angular frequency ω (rad/s)",
+        ylabel="power (normalised)",
+        xlim=(0, top if omega_max is None else omega_max),
+        ylim=(1e-8, 2),
+        title="Spectrum",
+    )
+    if len(marks):
+        ax.legend(loc="upper right", fontsize="small")
+    return ax.figure
+
+
+# --------------------------------------------------------------------------- explorer panels
+def _panel_energy(ax, traj, model):
+    plot_energy(traj, ax=ax)
+
+
+def _panel_energy_error(ax, traj, model):
+    plot_energy_error(traj, ax=ax)
+
+
+def _panel_angles(ax, traj, model):
+    plot_angles(traj, ax=ax)
+
+
+def _panel_phase(ax, traj, model):
+    plot_phase(traj, ax=ax)
+
+
+def _panel_portrait(ax, traj, model):
+    plot_phase_portrait(model, ax=ax, trajectory=traj)
+
+
+def _panel_pendulum(ax, traj, model):
+    draw_pendulum(model, traj.theta[-1], ax=ax, trail=traj.theta)
+    ax.set_title(f"Configuration at t = {traj.t[-1]:.2f} s")
+
+
+PANELS: dict[str, Callable[[Axes, Trajectory, PendulumModel], None]] = {
+    "energy": _panel_energy,
+    "energy_error": _panel_energy_error,
+    "angles": _panel_angles,
+    "phase": _panel_phase,
+    "portrait": _panel_portrait,
+    "pendulum": _panel_pendulum,
+}
+"""Single-axes drawings by name, each ``(ax, trajectory, model) -> None``:
+
+``energy`` (kinetic, potential, total), ``energy_error`` (relative, log
+scale), ``angles``, ``phase`` (all arms overlaid), ``portrait`` (simple
+pendulum only: level sets of H with the trajectory), ``pendulum`` (final
+configuration with the last bob's path).
+"""
