@@ -420,7 +420,7 @@ PANELS: dict[str, Callable[[Axes, Trajectory, PendulumModel], None]] = {
 """Single-axes drawings by name, each ``(ax, trajectory, model) -> None``:
 
 ``energy`` (kinetic, potential, total), ``energy_error`` (relative, log
-scale), ``angles``, ``phase`` (all arms overlaid), ``portrait`` (simple
+scale), ``angles``, ``phase`` (all links overlaid), ``portrait`` (simple
 pendulum only: level sets of H with the trajectory), ``pendulum`` (final
 configuration with the last bob's path).
 """
