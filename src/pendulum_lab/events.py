@@ -44,7 +44,7 @@ __all__ = ["Crossings", "check_direction", "find_crossings", "hermite", "hermite
 def check_direction(direction, allow_both: bool = True) -> int:
     """``direction`` as an int: ``1`` (upwards), ``-1`` (downwards) or, if allowed, ``0`` (both)."""
     allowed = (1, -1, 0) if allow_both else (1, -1)
-    return check.choice("direction", direction, allowed)
+    return int(check.choice("direction", direction, allowed))
 
 
 def hermite(s, y0, y1, d0, d1):

@@ -125,6 +125,7 @@ class SegmentedRun:
 
     @property
     def time(self) -> float:
+        """Time of the current state [s], where the next segment starts."""
         return self.t0 + self.done * self.dt
 
     def __iter__(self) -> Iterator[Trajectory]:
