@@ -172,9 +172,10 @@ def _leapfrog(problem: _Problem):
     drift = [_add(qi, _times_h(g, half)) for qi, g in zip(q, problem.at(problem.h_p, q, p_half))]
     q1 = q
     for _ in range(problem.order):
-        q1 = [_add(d, _times_h(g, half)) for d, g in zip(drift, problem.at(problem.h_p, q1, p_half))]
-    p1 = [_add(pi, _times_h(g, -half)) for pi, g in zip(p_half, problem.at(problem.h_q, q1, p_half))]
-    return q1, p1
+        velocity = problem.at(problem.h_p, q1, p_half)
+        q1 = [_add(d, _times_h(g, half)) for d, g in zip(drift, velocity)]
+    force = problem.at(problem.h_q, q1, p_half)
+    return q1, [_add(pi, _times_h(g, -half)) for pi, g in zip(p_half, force)]
 
 
 def _runge_kutta(a, b):
@@ -308,28 +309,27 @@ def modified_fields(series, variables) -> list[list]:
         return [sp.expand(sp.Add(*[sp.diff(gi, y) * fy for y, fy in zip(variables, f)]))
                 for gi in g]
 
+    def word(w, memo):
+        """``L_{w_0} L_{w_1} ... f_{w_last}``, memoised on suffixes."""
+        if w not in memo:
+            memo[w] = (fields[w[0] - 1] if len(w) == 1
+                       else lie(word(w[1:], memo), fields[w[0] - 1]))
+        return memo[w]
+
     for total in range(2, order + 1):
-        words = {}
-
-        def word(w):
-            # L_{w0} L_{w1} ... f_{w_last}, memoised on suffixes
-            if w not in words:
-                words[w] = fields[w[0] - 1] if len(w) == 1 else lie(word(w[1:]), fields[w[0] - 1])
-            return words[w]
-
-        flow = [[] for _ in variables]
+        memo, flow = {}, [[] for _ in variables]
         for composition in _compositions(total):
             if len(composition) < 2:
                 continue
             weight = sp.Rational(1, math.factorial(len(composition)))
-            for m, value in enumerate(word(composition)):
+            for m, value in enumerate(word(composition, memo)):
                 flow[m].append(weight * value)
         fields.append([sp.expand(component[total] - sp.Add(*terms))
                        for component, terms in zip(series, flow)])
     return fields
 
 
-# --------------------------------------------------------------------------- elementary Hamiltonians
+# ------------------------------------------------------------------------- elementary Hamiltonians
 def _labelled_trees(nodes: int):
     """Edge lists of all labelled trees on ``nodes`` vertices (Pruefer sequences)."""
     if nodes == 1:
