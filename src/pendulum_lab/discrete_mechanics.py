@@ -82,7 +82,7 @@ class DiscreteLagrangian:
     --------
     >>> dl = discrete_lagrangian(1, "trapezoid")
     >>> dl.momentum_minus[0]
-    g*h*l*m*sin(theta_{k})/2 - l**2*m*theta_{k}/h + l**2*m*theta_{k+1}/h
+    g*h*l*m*sin(theta_{k})/2 + l**2*m*theta_{k+1}/h - l**2*m*theta_{k}/h
     """
 
     def __init__(self, chain: Chain, rule: str):

@@ -239,13 +239,17 @@ def step_density(model: PendulumModel, theta, p, frequency: float | None = None)
                      (w2 + speed2)])
 
 
-def _sundman_step(model, theta, p, rho, epsilon, frequency):
-    """One step of the reversible adaptive leapfrog; returns ``(theta, p, rho, h)``."""
-    rho_half = rho + 0.5 * epsilon * step_density(model, theta, p, frequency)[1]
+def _sundman_step(model, theta, p, rho, control, epsilon, frequency):
+    """One step of the reversible adaptive leapfrog.
+
+    ``control`` is ``G`` at the current state (the end of the previous step
+    computed it). Returns ``(theta, p, rho, control, h)``.
+    """
+    rho_half = rho + 0.5 * epsilon * control
     h = epsilon / rho_half
     theta, p = one_step(model, "leapfrog", theta, p, h)
-    rho = rho_half + 0.5 * epsilon * step_density(model, theta, p, frequency)[1]
-    return theta, p, rho, h
+    control = step_density(model, theta, p, frequency)[1]
+    return theta, p, rho_half + 0.5 * epsilon * control, control, h
 
 
 def reversible_adaptive_leapfrog(model: PendulumModel, theta0, p0, *, t_end: float,
@@ -282,9 +286,11 @@ def reversible_adaptive_leapfrog(model: PendulumModel, theta0, p0, *, t_end: flo
         frequency = check.positive_number("frequency", frequency)
     start, t = time.perf_counter(), 0.0
     times, thetas, ps = [0.0], [theta], [p]
-    rho = 1.0 / step_density(model, theta, p, frequency)[0]
+    sigma, control = step_density(model, theta, p, frequency)
+    rho = 1.0 / sigma
     while t < t_end * (1 - 1e-12):
-        theta, p, rho, h = _sundman_step(model, theta, p, rho, epsilon, frequency)
+        theta, p, rho, control, h = _sundman_step(model, theta, p, rho, control, epsilon,
+                                                  frequency)
         t += h
         times.append(t)
         thetas.append(theta)
@@ -309,13 +315,13 @@ def round_trip_error(model: PendulumModel, method: str, theta0, p0, *, steps: in
     if method == "reversible":
         epsilon = check.positive_number("epsilon", options["epsilon"])
         frequency = options.get("frequency")
-        rho = 1.0 / step_density(model, theta, p, frequency)[0]
-        state = (theta, p, rho)
+        sigma, control = step_density(model, theta, p, frequency)
+        state = (theta, p, 1.0 / sigma, control)
         for leg in range(2):
-            if leg:
-                state = (state[0], -state[1], state[2])
+            if leg:  # reverse the momenta; G is odd in p
+                state = (state[0], -state[1], state[2], -state[3])
             for _ in range(steps):
-                state = _sundman_step(model, *state, epsilon, frequency)[:3]
+                state = _sundman_step(model, *state, epsilon, frequency)[:4]
         theta2, p2 = state[0], state[1]
     elif method == "naive":
         tol = check.positive_number("tol", options["tol"])

@@ -263,7 +263,7 @@ def modified_equation(model: PendulumModel, method, order: int) -> list[sp.Matri
     --------
     >>> import pendulum_lab as pl
     >>> modified_equation(pl.simple_pendulum(), "explicit_euler", 1)[1].T
-    Matrix([[g*sin(theta)/(2*l), g*p*cos(theta)/(2*l**2*m)]])
+    Matrix([[g*sin(theta)/(2*l), g*p*cos(theta)/(2*l)]])
     """
     model = check_model(model)
     _check_links(model, (1,))
@@ -451,8 +451,8 @@ def exact_libration(model: PendulumModel, amplitude: float, t) -> tuple[np.ndarr
     --------
     >>> import pendulum_lab as pl
     >>> theta, p = exact_libration(pl.simple_pendulum(), 1.0, [0.0])
-    >>> float(theta[0, 0]), float(p[0, 0])
-    (1.0, 0.0)
+    >>> bool(theta[0, 0] == 1.0), bool(abs(p[0, 0]) < 1e-14)
+    (True, True)
     """
     model = check_model(model)
     _check_links(model, (1,))

@@ -67,11 +67,11 @@ def ellipse_loop(center, axes, points: int) -> np.ndarray:
 
     Examples
     --------
-    >>> ellipse_loop([0.0, 0.0], [[1.0, 0.0], [0.0, 2.0]], 4).round(12)
+    >>> ellipse_loop([0.0, 0.0], [[1.0, 0.0], [0.0, 2.0]], 4).round(12) + 0.0
     array([[ 1.,  0.],
            [ 0.,  2.],
            [-1.,  0.],
-           [-0.,  -2.]])
+           [ 0., -2.]])
     """
     center = np.asarray(center, float)
     axes = np.asarray(axes, float)
@@ -259,7 +259,7 @@ def symplectic_form_defect(matrix) -> float:
     --------
     >>> stretch = np.diag([2.0, 1.0, 1.0, 0.5])   # det 1, but q1 and p1 are not paired
     >>> float(np.linalg.det(stretch)), symplectic_form_defect(stretch)
-    (1.0, 1.5)
+    (1.0, 1.0)
     """
     psi = np.asarray(matrix, float)
     dim = psi.shape[0]
