@@ -69,6 +69,8 @@ def plot_level_sets(energy, theta_range, p_range, ax=None, levels=15, **contour_
 def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3):
     """The loop of initial states and its images at saved times, one panel per method.
 
+    Each panel is scaled to its own loops, with the energy's level sets behind.
+
     Parameters
     ----------
     model : PendulumModel
@@ -78,22 +80,21 @@ def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3):
         Indices of saved times to draw.
     """
     fig, grid = _grid_axes(axes, len(results), ncols, height=3.4)
-    loops = np.concatenate([r.loops[list(frames)] for r in results], axis=1)
-    lo, hi = loops.min(axis=(0, 1)), loops.max(axis=(0, 1))
-    pad = margin * (hi - lo)
     for ax, result in zip(grid, results):
+        loops = result.loops[list(frames)]
+        lo, hi = loops.min(axis=(0, 1)), loops.max(axis=(0, 1))
+        pad = margin * (hi - lo)
         plot_level_sets(model.hamiltonian_value, (lo[0] - pad[0], hi[0] + pad[0]),
                         (lo[1] - pad[1], hi[1] + pad[1]), ax=ax)
         for k, frame in enumerate(frames):
-            loop = result.loops[frame]
-            closed = np.vstack([loop, loop[:1]])
+            closed = np.vstack([result.loops[frame], result.loops[frame][:1]])
             ax.fill(closed[:, 0], closed[:, 1], alpha=0.35, color=f"C{k}",
                     label=f"t = {result.t[frame]:g} s")
             ax.plot(closed[:, 0], closed[:, 1], color=f"C{k}", lw=0.8)
         ax.set_title(f"{result.method}, h = {result.dt:g}", fontsize=10)
     for ax in grid[len(results):]:
         ax.set_visible(False)
-    grid[0].legend(fontsize=8, loc="upper right")
+    grid[0].legend(fontsize=8, loc="best")
     return fig
 
 
