@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.ticker import NullFormatter
 
 from ..plotting import new_figure
 from .standard_map import GREENE_K
@@ -23,6 +24,7 @@ __all__ = [
     "plot_error_growth",
     "plot_level_sets",
     "plot_modified_energy_orders",
+    "plot_orbit_on_level_sets",
     "plot_projected_areas",
     "plot_standard_map",
     "plot_step_sizes",
@@ -64,6 +66,33 @@ def plot_level_sets(energy, theta_range, p_range, ax=None, levels=15, **contour_
     ax.set_xlabel(r"$\theta$ [rad]")
     ax.set_ylabel(r"$p$ [kg m$^2$/s]")
     return ax.figure
+
+
+def plot_orbit_on_level_sets(run, functions, axes=None, margin=0.15):
+    """A computed orbit on the level sets of several functions, one panel each.
+
+    Parameters
+    ----------
+    run : Trajectory
+        A simple-pendulum run.
+    functions : dict
+        ``{label: f}`` with ``f(theta, p)`` NumPy functions (``H``, a truncated ``H~``).
+        The level through the orbit's first state is drawn in black.
+    """
+    fig, grid = _grid_axes(axes, len(functions), len(functions), height=4.0)
+    theta, p = run.theta[:, 0], run.p[:, 0]
+    span = np.array([np.ptp(theta), np.ptp(p)])
+    lo = np.array([theta.min(), p.min()]) - margin * span
+    hi = np.array([theta.max(), p.max()]) + margin * span
+    for ax, (label, f) in zip(grid, functions.items()):
+        plot_level_sets(f, (lo[0], hi[0]), (lo[1], hi[1]), ax=ax, levels=12)
+        start = float(f(run.theta[:1], run.p[:1])[0])
+        plot_level_sets(f, (lo[0], hi[0]), (lo[1], hi[1]), ax=ax, levels=[start],
+                        colors="black", linewidths=1.2)
+        ax.plot(theta, p, ".", color="tab:red", ms=3, label=f"{run.method.name}, h = {run.dt:g}")
+        ax.set_title(f"level sets of {label}", fontsize=10)
+    grid[0].legend(fontsize=8, loc="upper right")
+    return fig
 
 
 def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3):
@@ -136,6 +165,7 @@ def plot_modified_energy_orders(result, ax=None):
         name = "H" if k == 0 else rf"$\tilde H$ to $h^{k}$"
         ax.loglog(result.dts, errors, marker="o",
                   label=f"{name}: slope {slope:.2f} (theory {expected})")
+    ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short decades
     ax.set_xlabel("step h [s]")
     ax.set_ylabel("max |error| along the orbit [J]")
     ax.set_title(result.method, fontsize=10)
@@ -149,6 +179,7 @@ def plot_energy_drift(result, ax=None):
     ax.loglog(result.dts, np.abs(result.measured), "o", label="measured (fit over the run)")
     ax.loglog(result.dts, np.abs(result.predicted), "-",
               label=rf"predicted, $\propto h^{result.power}$")
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("step h [s]")
     ax.set_ylabel("|dE/dt| [J/s]")
     ax.set_title(f"{result.method}: energy drift from {result.amplitude:g} rad", fontsize=10)
@@ -158,7 +189,7 @@ def plot_energy_drift(result, ax=None):
 
 def plot_error_growth(results, ax=None, labels=None):
     """Global error against time, log-log, with lines of slope 1 and 2 for reference."""
-    ax = _axes(ax)
+    ax = _axes(ax, width=9.0, height=5.0)
     labels = labels or [f"{r.method}, h = {r.dt:g}, from {r.amplitude:g} rad" for r in results]
     for result, label in zip(results, labels):
         ax.loglog(result.t, result.error, marker=".", label=label)

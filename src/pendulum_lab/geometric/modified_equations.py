@@ -132,8 +132,18 @@ def _difference(series, value) -> list:
 
 
 # --------------------------------------------------------------------------- the methods
+def _cut(series, order: int) -> list:
+    """``series`` truncated (or padded with zeros) to powers ``h^0 .. h^order``."""
+    return list(series[: order + 1]) + [_ZERO] * (order + 1 - len(series))
+
+
 class _Problem:
-    """A Hamiltonian ``H(q, p)`` and its partial derivatives, for one expansion."""
+    """A Hamiltonian ``H(q, p)`` and its partial derivatives, for one expansion.
+
+    The implicit equations are solved by sweeps that each fix one more power
+    of ``h``; sweep ``k`` works with series truncated after ``h^k``, which
+    keeps the early sweeps cheap.
+    """
 
     def __init__(self, hamiltonian, q, p, order):
         self.q, self.p, self.n, self.order = list(q), list(p), len(q), order
@@ -143,37 +153,41 @@ class _Problem:
         self.field = self.h_p + [-e for e in self.h_q]
 
     def at(self, exprs, q_series, p_series) -> list:
-        """``exprs`` evaluated at the point given as series ``(q_series, p_series)``."""
+        """``exprs`` at the point given as series ``(q_series, p_series)``, to their order."""
+        order = len(q_series[0]) - 1
         displacement = [_difference(s, y) for s, y in zip(q_series + p_series, self.variables)]
-        return [_shifted(e, self.variables, displacement, self.order) for e in exprs]
+        return [_shifted(e, self.variables, displacement, order) for e in exprs]
 
-    def constants(self, values) -> list:
-        return [_constant(v, self.order) for v in values]
+    def constants(self, values, order: int | None = None) -> list:
+        return [_constant(v, self.order if order is None else order) for v in values]
 
 
 def _semi_implicit_euler(problem: _Problem):
     """``p1 = p - h H_q(q, p1)``;  ``q1 = q + h H_p(q, p1)`` [HLW, Thm VI.3.3]."""
-    q, p = problem.constants(problem.q), problem.constants(problem.p)
-    p1 = p
-    for _ in range(problem.order):
-        p1 = [_add(pi, _times_h(g, -1)) for pi, g in zip(p, problem.at(problem.h_q, q, p1))]
-    q1 = [_add(qi, _times_h(g, 1)) for qi, g in zip(q, problem.at(problem.h_p, q, p1))]
-    return q1, p1
+    p1 = [[x] for x in problem.p]
+    for k in range(1, problem.order + 1):
+        q, p = problem.constants(problem.q, k), problem.constants(problem.p, k)
+        force = problem.at(problem.h_q, q, [_cut(s, k) for s in p1])
+        p1 = [_add(pi, _times_h(g, -1)) for pi, g in zip(p, force)]
+    q = problem.constants(problem.q)
+    return [_add(qi, _times_h(g, 1)) for qi, g in zip(q, problem.at(problem.h_p, q, p1))], p1
 
 
 def _leapfrog(problem: _Problem):
     """Generalized Stormer-Verlet [HLW, eq. VI.3.4], kick-drift-kick."""
     half = sp.Rational(1, 2)
-    q, p = problem.constants(problem.q), problem.constants(problem.p)
-    p_half = p
-    for _ in range(problem.order):
-        p_half = [_add(pi, _times_h(g, -half))
-                  for pi, g in zip(p, problem.at(problem.h_q, q, p_half))]
+    p_half = [[x] for x in problem.p]
+    for k in range(1, problem.order + 1):
+        q, p = problem.constants(problem.q, k), problem.constants(problem.p, k)
+        force = problem.at(problem.h_q, q, [_cut(s, k) for s in p_half])
+        p_half = [_add(pi, _times_h(g, -half)) for pi, g in zip(p, force)]
+    q = problem.constants(problem.q)
     drift = [_add(qi, _times_h(g, half)) for qi, g in zip(q, problem.at(problem.h_p, q, p_half))]
-    q1 = q
-    for _ in range(problem.order):
-        velocity = problem.at(problem.h_p, q1, p_half)
-        q1 = [_add(d, _times_h(g, half)) for d, g in zip(drift, velocity)]
+    q1 = [[x] for x in problem.q]
+    for k in range(1, problem.order + 1):
+        velocity = problem.at(problem.h_p, [_cut(s, k) for s in q1],
+                              [_cut(s, k) for s in p_half])
+        q1 = [_add(_cut(d, k), _times_h(g, half)) for d, g in zip(drift, velocity)]
     force = problem.at(problem.h_q, q1, p_half)
     return q1, [_add(pi, _times_h(g, -half)) for pi, g in zip(p_half, force)]
 
@@ -182,21 +196,23 @@ def _runge_kutta(a, b):
     """The Runge-Kutta method with exact tableau ``(a, b)``, explicit or implicit."""
 
     def method(problem: _Problem):
-        stages, dim = len(b), 2 * problem.n
-        y = problem.constants(problem.variables)
-        slopes = [problem.constants(problem.field) for _ in range(stages)]
-        # One sweep fixes one more power of h in every stage (explicit or not).
-        for _ in range(problem.order):
-            new = []
+        stages, dim, n = len(b), 2 * problem.n, problem.n
+        slopes = [[[f] for f in problem.field] for _ in range(stages)]
+        # Sweep k fixes the coefficient of h^k in every stage (explicit or not).
+        for k in range(1, problem.order + 1):
+            y = problem.constants(problem.variables, k)
+            old = [[_cut(s, k) for s in stage] for stage in slopes]
+            slopes = []
             for i in range(stages):
-                point = [_add(y[m], *[_times_h(slopes[j][m], a[i][j])
+                point = [_add(y[m], *[_times_h(old[j][m], a[i][j])
                                       for j in range(stages) if a[i][j] != 0])
                          for m in range(dim)]
-                new.append(problem.at(problem.field, point[: problem.n], point[problem.n:]))
-            slopes = new
+                slopes.append(problem.at(problem.field, point[:n], point[n:]))
+        y = problem.constants(problem.variables)
+        slopes = [[_cut(s, problem.order) for s in stage] for stage in slopes]
         y1 = [_add(y[m], *[_times_h(slopes[i][m], b[i]) for i in range(stages)])
               for m in range(dim)]
-        return y1[: problem.n], y1[problem.n:]
+        return y1[:n], y1[n:]
 
     return method
 
