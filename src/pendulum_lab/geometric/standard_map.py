@@ -35,7 +35,8 @@ import numba
 import numpy as np
 
 from .. import _validation as check
-from ..model import PendulumModel, check_model
+from ..model import PendulumModel
+from ._checks import simple_pendulum_model
 
 __all__ = [
     "GREENE_K",
@@ -53,12 +54,6 @@ __all__ = [
 GREENE_K = 0.971635406
 
 
-def _simple(model) -> PendulumModel:
-    model = check_model(model)
-    if model.n != 1:
-        raise ValueError(f"`model` must be a simple pendulum (n = 1), got n = {model.n}")
-    return model
-
 
 def stochasticity_parameter(model: PendulumModel, h: float) -> float:
     """``K = (g / l) h^2``: the standard map that symplectic Euler with step ``h`` is.
@@ -69,7 +64,7 @@ def stochasticity_parameter(model: PendulumModel, h: float) -> float:
     >>> round(stochasticity_parameter(pl.simple_pendulum(length=1.0, g=9.81), 0.1), 6)
     0.0981
     """
-    model = _simple(model)
+    model = simple_pendulum_model(model)
     h = check.positive_number("h", h)
     return model.g / model.lengths[0] * h**2
 
@@ -86,14 +81,14 @@ def critical_step(model: PendulumModel, k: float = GREENE_K) -> float:
     >>> round(critical_step(pl.simple_pendulum(length=1.0, g=9.81)), 4)
     0.3147
     """
-    model = _simple(model)
+    model = simple_pendulum_model(model)
     k = check.positive_number("k", k)
     return float(np.sqrt(k * model.lengths[0] / model.g))
 
 
 def to_standard_map(model: PendulumModel, theta, p, h: float):
     """``(phi, I) = (theta + pi, h p / (m l^2))``: pendulum state to standard-map state."""
-    model = _simple(model)
+    model = simple_pendulum_model(model)
     h = check.positive_number("h", h)
     inertia = model.masses[0] * model.lengths[0] ** 2
     return np.asarray(theta, float) + np.pi, h * np.asarray(p, float) / inertia
@@ -101,7 +96,7 @@ def to_standard_map(model: PendulumModel, theta, p, h: float):
 
 def from_standard_map(model: PendulumModel, phi, action, h: float):
     """The inverse of :func:`to_standard_map`: ``(theta, p)``."""
-    model = _simple(model)
+    model = simple_pendulum_model(model)
     h = check.positive_number("h", h)
     inertia = model.masses[0] * model.lengths[0] ** 2
     return np.asarray(phi, float) - np.pi, inertia * np.asarray(action, float) / h
