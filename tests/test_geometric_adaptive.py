@@ -49,3 +49,24 @@ def test_adaptive_bad_input():
         ad.round_trip_error(SP, "adaptive", [1.0], [0.0], steps=3)
     with pytest.raises(ValueError, match="shape"):
         ad.naive_adaptive_leapfrog(SP, [[1.0]], [[0.0]], t_end=1.0, tol=1e-3)
+
+
+def test_a_state_dependent_step_is_not_symplectic():
+    variable, frozen = ad.state_dependent_step_defect(SP, [2.0], [1.0], epsilon=0.1)
+    assert variable > 1e-3
+    assert frozen < 1e-8  # negative control: the same step, frozen, is symplectic
+
+
+def test_poincare_transform_keeps_the_energy_bounded_with_variable_steps():
+    run = ad.poincare_adaptive_midpoint(SP, [2.5], [0.0], t_end=60.0, epsilon=0.1)
+    first, last = run.largest_error(0, 6), run.largest_error(54, 60)
+    assert abs(last / first - 1) < 0.05
+    assert run.step_sizes.max() > 1.8 * run.step_sizes.min()
+    # the steps follow sigma: epsilon at rest, smaller at speed
+    assert abs(run.step_sizes.max() / 0.1 - 1) < 0.01
+
+
+def test_poincare_transform_bad_input():
+    with pytest.raises(ValueError, match="1 or 2 links"):
+        ad.poincare_adaptive_midpoint(pl.n_pendulum(3), [0.1] * 3, [0.0] * 3, t_end=1.0,
+                                      epsilon=0.1)

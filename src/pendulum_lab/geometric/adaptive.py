@@ -34,22 +34,28 @@ References
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 
 import numpy as np
+import sympy as sp
 from scipy.integrate import solve_ivp
 
 from .. import _validation as check
+from ..mechanics import derive_chain
 from ..model import PendulumModel, check_model
 from ._api import one_step
+from .phase_space import symplectic_form_defect
 
 __all__ = [
     "AdaptiveRun",
     "naive_adaptive_leapfrog",
+    "poincare_adaptive_midpoint",
     "reversible_adaptive_leapfrog",
     "round_trip_error",
     "scipy_run",
+    "state_dependent_step_defect",
     "step_density",
 ]
 
@@ -335,3 +341,119 @@ def round_trip_error(model: PendulumModel, method: str, theta0, p0, *, steps: in
     else:
         raise ValueError(f"`method` must be 'reversible' or 'naive', got {method!r}")
     return float(max(np.max(np.abs(theta2 - theta)), np.max(np.abs(-p2 - p))))
+
+
+def state_dependent_step_defect(model: PendulumModel, theta, p, *, epsilon: float,
+                                frequency: float | None = None,
+                                delta: float = 1e-6) -> tuple[float, float]:
+    """Why a step chosen from the state spoils symplecticity, in one number.
+
+    Compares the maps ``y -> leapfrog_{h(y)}(y)`` with ``h(y) = epsilon sigma(y)``
+    (the step follows the state) and ``y -> leapfrog_{h0}(y)`` with the step
+    frozen at ``h0 = h(y0)``: the Jacobian of the first picks up
+    ``(d leapfrog / dh) grad h(y)^T``, which is not symplectic.
+
+    Returns
+    -------
+    variable, frozen : float
+        ``max |Psi^T J Psi - J|`` of the two maps at ``(theta, p)``, from
+        central differences with spacing ``delta``.
+    """
+    model, theta, p = _start(model, theta, p)
+    epsilon = check.positive_number("epsilon", epsilon)
+    n, z0 = model.n, np.concatenate([theta, p])
+    frozen = epsilon * step_density(model, theta, p, frequency)[0]
+
+    def jacobian(step_of):
+        columns = []
+        for k in range(2 * n):
+            dz = np.zeros(2 * n)
+            dz[k] = delta
+            ends = [np.concatenate(one_step(model, "leapfrog", z[:n], z[n:], step_of(z)))
+                    for z in (z0 + dz, z0 - dz)]
+            columns.append((ends[0] - ends[1]) / (2 * delta))
+        return np.array(columns).T
+
+    def variable(z):
+        return epsilon * step_density(model, z[:n], z[n:], frequency)[0]
+
+    return (symplectic_form_defect(jacobian(variable)),
+            symplectic_form_defect(jacobian(lambda z: frozen)))
+
+
+@functools.cache
+def _poincare_field(n: int):
+    """``J^-1 grad K`` and ``sigma`` for ``K = sigma (H - E0)``, lambdified for floats.
+
+    Arguments: angles, momenta, parameters, ``E0``, ``w^2``.
+    """
+    chain = derive_chain(n)
+    energy, w2 = sp.symbols("E_0 w2", positive=True)
+    omega = chain.inverse_mass_matrix * chain.p
+    sigma = 1 / sp.sqrt(1 + (omega.T * omega)[0, 0] / w2)
+    k = sigma * (chain.hamiltonian - energy)
+    field = [k.diff(x) for x in chain.p] + [-k.diff(x) for x in chain.q]
+    args = (*chain.q, *chain.p, *chain.parameters, energy, w2)
+    return sp.lambdify(args, [*field, sigma], modules="math", cse=True)
+
+
+def poincare_adaptive_midpoint(model: PendulumModel, theta0, p0, *, t_end: float,
+                               epsilon: float, frequency: float | None = None) -> AdaptiveRun:
+    """The symplectic route to variable steps: a Poincare time transformation.
+
+    The Hamiltonian ``K(y) = sigma(y) (H(y) - E0)`` with ``E0 = H(y0)`` has the
+    level set ``K = 0``, on which its flow is ``dy/dtau = sigma(y) f(y)``: the
+    pendulum's motion with the clock ``dt/dtau = sigma``. Integrating ``K`` with
+    constant steps ``epsilon`` by a symplectic method (the implicit midpoint
+    rule here, solved by fixed-point iteration to round-off) gives variable
+    steps ``h ~ epsilon sigma`` in ``t`` and a symplectic map, so backward
+    error analysis applies again. ``K`` is not separable: the price is an
+    implicit method and the derivatives of ``sigma``.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A simple or double pendulum (``sigma`` as in :func:`step_density`).
+    theta0, p0 : array_like, shape (n,)
+    t_end, epsilon : float
+    frequency : float, optional
+
+    References
+    ----------
+    HLW, Sect. VIII.2.1 (Poincare transformation); VI.3 (implicit midpoint rule).
+    """
+    model, theta, p = _start(model, theta0, p0)
+    if model.n > 2:
+        raise ValueError(f"`model` must have 1 or 2 links here, got n = {model.n}")
+    t_end = check.positive_number("t_end", t_end)
+    epsilon = check.positive_number("epsilon", epsilon)
+    w2 = model.g / model.lengths[0] if frequency is None else (
+        check.positive_number("frequency", frequency) ** 2)
+    field, n = _poincare_field(model.n), model.n
+    constants = (*model.masses, *model.lengths, model.g,
+                 float(model.hamiltonian_value(theta, p)), w2)
+    start, t, calls = time.perf_counter(), 0.0, 0
+    z = np.concatenate([theta, p])
+    times, thetas, ps = [0.0], [theta], [p]
+    while t < t_end * (1 - 1e-12):
+        z1, previous, sweeps = z.copy(), np.inf, 0
+        while True:
+            sweeps += 1
+            *slope, sigma = field(*(0.5 * (z + z1)), *constants)
+            new = z + epsilon * np.asarray(slope)
+            change = float(np.max(np.abs(new - z1)))
+            z1 = new
+            if change == 0.0 or change >= previous:  # converged, or jittering at round-off
+                break
+            if sweeps == 100:
+                raise RuntimeError(f"the implicit midpoint step did not converge (epsilon = "
+                                   f"{epsilon:g}): use a smaller epsilon")
+            previous = change
+        calls += sweeps
+        t += epsilon * sigma
+        z = z1
+        times.append(t)
+        thetas.append(z[:n])
+        ps.append(z[n:])
+    return _finish(f"Poincare transform + implicit midpoint, epsilon {epsilon:g}", model, times,
+                   thetas, ps, calls, start)
