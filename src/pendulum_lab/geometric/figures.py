@@ -238,16 +238,22 @@ def plot_transport_threshold(result, ax=None):
     return ax.figure
 
 
-def plot_adaptive_energy(runs, ax=None):
-    """Energy error against time for several runs (fixed or adaptive steps)."""
+def plot_adaptive_energy(runs, ax=None, envelope=False):
+    """Energy error against time for several runs (fixed or adaptive steps).
+
+    With ``envelope=True`` the largest ``|E - E0|`` so far is drawn on a
+    logarithmic axis: drifts of very different sizes then share one picture.
+    """
     ax = _axes(ax)
     for run in runs:
-        t = run.t
-        error = run.energy_error
         label = getattr(run, "label", None) or f"{run.method.name}, dt = {run.dt:g}"
-        ax.plot(t, error, lw=0.8, label=label)
+        if envelope:
+            ax.semilogy(run.t[1:], np.maximum.accumulate(np.abs(run.energy_error))[1:], lw=1.0,
+                        label=label)
+        else:
+            ax.plot(run.t, run.energy_error, lw=0.8, label=label)
     ax.set_xlabel("t [s]")
-    ax.set_ylabel("H - H(0) [J]")
+    ax.set_ylabel("largest |H - H(0)| so far [J]" if envelope else "H - H(0) [J]")
     ax.legend(fontsize=8)
     return ax.figure
 
