@@ -46,7 +46,7 @@ from .. import _validation as check
 from ..mechanics import derive_chain
 from ..model import PendulumModel, check_model
 from ._api import one_step
-from .phase_space import symplectic_form_defect
+from .phase_space import finite_difference_jacobian, symplectic_form_defect
 
 __all__ = [
     "AdaptiveRun",
@@ -364,21 +364,14 @@ def state_dependent_step_defect(model: PendulumModel, theta, p, *, epsilon: floa
     n, z0 = model.n, np.concatenate([theta, p])
     frozen = epsilon * step_density(model, theta, p, frequency)[0]
 
-    def jacobian(step_of):
-        columns = []
-        for k in range(2 * n):
-            dz = np.zeros(2 * n)
-            dz[k] = delta
-            ends = [np.concatenate(one_step(model, "leapfrog", z[:n], z[n:], step_of(z)))
-                    for z in (z0 + dz, z0 - dz)]
-            columns.append((ends[0] - ends[1]) / (2 * delta))
-        return np.array(columns).T
+    def leapfrog_with(step_of):
+        return lambda z: np.concatenate(one_step(model, "leapfrog", z[:n], z[n:], step_of(z)))
 
     def variable(z):
         return epsilon * step_density(model, z[:n], z[n:], frequency)[0]
 
-    return (symplectic_form_defect(jacobian(variable)),
-            symplectic_form_defect(jacobian(lambda z: frozen)))
+    return tuple(symplectic_form_defect(finite_difference_jacobian(leapfrog_with(rule), z0, delta))
+                 for rule in (variable, lambda z: frozen))
 
 
 @functools.cache

@@ -44,6 +44,7 @@ __all__ = [
     "LoopAreas",
     "carried_loop_areas",
     "ellipse_loop",
+    "finite_difference_jacobian",
     "jacobian_along_orbit",
     "jacobian_properties",
     "polygon_area",
@@ -248,6 +249,29 @@ def carried_loop_areas(model: PendulumModel, method, center, axes, *, t_end: flo
     loops = np.concatenate([loop.theta, loop.p], axis=-1)
     return LoopAreas(get_method(method).name, float(dt), loop.t, estimate[0], estimate[1],
                      points, float(error), loops)
+
+
+def finite_difference_jacobian(function, z, delta: float = 1e-6) -> np.ndarray:
+    """Jacobian of a map ``z -> function(z)`` of ``R^d`` by central differences.
+
+    For maps that :func:`pendulum_lab.analysis.step_jacobian` does not cover
+    (a variable step, a reference solver); accurate to about ``delta^2``
+    times the third derivatives plus round-off over ``delta``.
+
+    Examples
+    --------
+    >>> finite_difference_jacobian(lambda z: np.array([z[0] * z[1], z[0]]), [2.0, 3.0]).round(8)
+    array([[3., 2.],
+           [1., 0.]])
+    """
+    z = np.asarray(z, float)
+    columns = []
+    for k in range(z.size):
+        dz = np.zeros(z.size)
+        dz[k] = delta
+        columns.append((np.asarray(function(z + dz), float)
+                        - np.asarray(function(z - dz), float)) / (2 * delta))
+    return np.array(columns).T
 
 
 def symplectic_form_defect(matrix) -> float:
