@@ -137,7 +137,7 @@ def generic_modified_hamiltonian(method: str, order: int, n: int = 1,
 
     This is the general formula, before any pendulum is put in: for symplectic
     Euler it reproduces ``H - h/2 H_p H_q + h^2/12 (H_pp H_q^2 + H_qq H_p^2 +
-    4 H_pq H_p H_q)`` [HLW, eq. IX.3.?]. Symbols: ``q``, ``p`` for ``n = 1``,
+    4 H_pq H_p H_q)`` [HLW, Sect. IX.3]. Symbols: ``q``, ``p`` for ``n = 1``,
     ``q1, q2, p1, p2`` for ``n = 2``, and :data:`STEP_SIZE`.
 
     Examples

@@ -21,8 +21,8 @@ References
 ----------
 .. [HLW] E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*,
    2nd ed., Springer 2006: Sect. VI.1-VI.2 (area preservation, Poincare's
-   theorem, the integral invariant), Fig. VI.?? (a cat's head under the
-   methods).
+   theorem, the integral invariant; their figures carry a cat's head
+   through the methods).
 .. [Arnold] V. I. Arnold, *Mathematical Methods of Classical Mechanics*,
    2nd ed., Springer 1989, Sect. 44 (integral invariants).
 """
