@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from ..model import PendulumModel, check_model
+from ..model import PendulumModel
+from ._api import check_model
 
 
 def simple_pendulum_model(model) -> PendulumModel:

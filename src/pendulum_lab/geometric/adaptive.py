@@ -44,8 +44,8 @@ from scipy.integrate import solve_ivp
 
 from .. import _validation as check
 from ..mechanics import derive_chain
-from ..model import PendulumModel, check_model
-from ._api import one_step
+from ..model import PendulumModel
+from ._api import check_model, one_step
 from .phase_space import finite_difference_jacobian, symplectic_form_defect
 
 __all__ = [

@@ -34,8 +34,9 @@ from .. import _validation as check
 from ..analysis import exact_period
 from ..integrators import get_method
 from ..mechanics import derive_chain, is_identically_zero
-from ..model import PendulumModel, check_model
+from ..model import PendulumModel
 from ..simulate import simulate
+from ._api import check_model
 from .long_time import exact_libration
 from .modified_equations import (
     STEP_SIZE,

@@ -35,10 +35,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _validation as check
-from ..analysis import step_jacobian
 from ..integrators import get_method
-from ..model import PendulumModel, check_model
+from ..model import PendulumModel
 from ..simulate import simulate
+from ._api import check_model, one_step_jacobian
 
 __all__ = [
     "LoopAreas",
@@ -313,7 +313,7 @@ def jacobian_properties(model: PendulumModel, method, theta, p, dt: float) -> tu
     1.0981
     """
     model = check_model(model)
-    jac = step_jacobian(model, method, np.asarray(theta, float), np.asarray(p, float), dt)
+    jac = one_step_jacobian(model, method, theta, p, dt)
     return float(np.linalg.det(jac)), symplectic_form_defect(jac)
 
 
