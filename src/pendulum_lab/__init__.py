@@ -26,11 +26,16 @@ __version__ = "0.1.0"
 
 # Submodules that pull in heavy dependencies (ipywidgets, matplotlib) load on
 # first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
-_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "events", "mechanics",
-                    "plotting", "report", "source", "tables", "timing", "widgets"}
+_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "discrete_mechanics", "events",
+                    "geometric", "mechanics", "plotting", "report", "source", "tables", "timing",
+                    "widgets"}
 
 
 def __getattr__(name):
+    if name == "modified_hamiltonian":  # backward error analysis (notebook 14), loaded on use
+        from .geometric import modified_hamiltonian
+
+        return modified_hamiltonian
     if name in _LAZY_SUBMODULES:
         import importlib
 
@@ -49,6 +54,7 @@ __all__ = [
     "double_pendulum",
     "get_method",
     "hamiltonian_field",
+    "modified_hamiltonian",
     "n_pendulum",
     "simple_pendulum",
     "simulate",
