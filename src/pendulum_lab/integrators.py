@@ -13,9 +13,12 @@ all methods except the two ``*_velocity`` ones, where it is the velocity;
 ``calls`` the vector-field evaluations. :func:`run` drives any of them over
 many steps and many initial states; it is the only time loop.
 
-Methods are data where they can be: explicit Euler and RK4 are Butcher
-tableaus run by :func:`explicit_rk`. Gauss-Legendre is a tableau whose stage
-equations are solved by fixed-point iteration. The symplectic partitioned
+Methods are data where they can be: a Runge-Kutta method (explicit Euler,
+RK4, Gauss-Legendre) is one registry entry made from its Butcher tableau by
+:meth:`Method.from_tableau`, which derives its order, implicitness,
+symplecticity and evaluation count (:mod:`pendulum_lab.tableau`); explicit
+tableaus are stepped by :func:`explicit_rk`, implicit ones by
+:func:`implicit_rk` (fixed-point iteration). The symplectic partitioned
 methods follow the textbook formulas line by line. All implicit equations are
 iterated to round-off with one stopping rule, :func:`fixed_point_status`.
 
@@ -40,6 +43,7 @@ import numpy as np
 from numba import types
 
 from ._signatures import ACCELERATION, HAMILTON, VECTOR
+from .tableau import ButcherTableau, gauss_legendre_tableau
 
 __all__ = [
     "METHODS",
@@ -54,6 +58,7 @@ __all__ = [
     "implicit_kick",
     "implicit_rk",
     "run",
+    "tableau_step",
 ]
 
 
@@ -80,76 +85,6 @@ class HamiltonianField:
     params: np.ndarray
     separable: bool
 
-
-# --------------------------------------------------------------------------- tableaus
-@dataclass(frozen=True)
-class ButcherTableau:
-    """A Runge-Kutta method as data; it checks itself on creation.
-
-    Checks: ``sum(b) == 1`` and row sums of ``A`` equal ``c`` (to 1e-14).
-    """
-
-    a: np.ndarray
-    b: np.ndarray
-    c: np.ndarray
-    order: int
-    explicit: bool = field(init=False)
-
-    def __post_init__(self):
-        a, b, c = (np.asarray(x, dtype=float) for x in (self.a, self.b, self.c))
-        s = b.size
-        if a.shape != (s, s) or c.shape != (s,):
-            raise ValueError(f"tableau shapes do not match: A {a.shape}, b {b.shape}, c {c.shape}")
-        if abs(b.sum() - 1.0) > 1e-14:
-            raise ValueError(f"tableau weights must sum to 1, got {b.sum()!r}")
-        if np.max(np.abs(a.sum(axis=1) - c)) > 1e-14:
-            raise ValueError("tableau row sums of A must equal c")
-        object.__setattr__(self, "a", a)
-        object.__setattr__(self, "b", b)
-        object.__setattr__(self, "c", c)
-        object.__setattr__(self, "explicit", bool(np.all(np.triu(a) == 0)))
-
-    @property
-    def stages(self) -> int:
-        return self.b.size
-
-
-EULER_TABLEAU = ButcherTableau(a=[[0.0]], b=[1.0], c=[0.0], order=1)
-RK4_TABLEAU = ButcherTableau(
-    a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]],
-    b=[1 / 6, 1 / 3, 1 / 3, 1 / 6],
-    c=[0, 0.5, 0.5, 1],
-    order=4,
-)
-
-
-def gauss_legendre_tableau(stages: int) -> ButcherTableau:
-    """The ``stages``-stage Gauss-Legendre collocation method (order ``2 stages``).
-
-    The nodes ``c`` are the zeros of the Legendre polynomial of degree
-    ``stages`` moved to [0, 1]; ``a_ij`` integrates the Lagrange polynomial
-    of node ``j`` from 0 to ``c_i`` and ``b_j`` from 0 to 1 [HLW, Sect. II.1.3].
-    """
-    x, _ = np.polynomial.legendre.leggauss(stages)
-    c = (x + 1.0) / 2.0
-    a, b = np.empty((stages, stages)), np.empty(stages)
-    for j in range(stages):
-        others = np.delete(c, j)
-        lagrange = np.polynomial.Polynomial.fromroots(others) / np.prod(c[j] - others)
-        integral = lagrange.integ()  # zero at t = 0
-        a[:, j], b[j] = integral(c), integral(1.0)
-    return ButcherTableau(a=a, b=b, c=c, order=2 * stages)
-
-
-# The course report's method (section 2.4.5): c = 1/2 -+ sqrt(3)/6, order 4.
-GAUSS4_TABLEAU = gauss_legendre_tableau(2)
-# Four stages, order 8: far fewer steps where high accuracy is wanted.
-GAUSS8_TABLEAU = gauss_legendre_tableau(4)
-# Numba freezes module-level arrays into the compiled code as constants.
-_EULER_A, _EULER_B = EULER_TABLEAU.a, EULER_TABLEAU.b
-_RK4_A, _RK4_B = RK4_TABLEAU.a, RK4_TABLEAU.b
-_GAUSS4_A, _GAUSS4_B = GAUSS4_TABLEAU.a, GAUSS4_TABLEAU.b
-_GAUSS8_A, _GAUSS8_B = GAUSS8_TABLEAU.a, GAUSS8_TABLEAU.b
 
 # --------------------------------------------------------------------------- kernel types
 HamiltonFn = types.FunctionType(HAMILTON)
@@ -268,20 +203,6 @@ def explicit_rk(hamilton, q, p, h, params, a, b):
             q1[m] += h * b[i] * kq[i, m]
             p1[m] += h * b[i] * kp[i, m]
     return q1, p1
-
-
-@jit_step
-def explicit_euler_step(hamilton, acceleration, q, p, h, params, separable):
-    """``y1 = y + h f(y)``."""
-    q1, p1 = explicit_rk(hamilton, q, p, h, params, _EULER_A, _EULER_B)
-    return q1, p1, 0, 1
-
-
-@jit_step
-def rk4_step(hamilton, acceleration, q, p, h, params, separable):
-    """Classical RK4: four stages, weights 1/6, 1/3, 1/3, 1/6."""
-    q1, p1 = explicit_rk(hamilton, q, p, h, params, _RK4_A, _RK4_B)
-    return q1, p1, 0, 4
 
 
 # --------------------------------------------------------------------------- symplectic methods
@@ -406,16 +327,29 @@ def implicit_rk(hamilton, q, p, h, params, a, b):
     return q1, p1, sweeps, calls
 
 
-@jit_step
-def glrk4_step(hamilton, acceleration, q, p, h, params, separable):
-    """Two-stage Gauss-Legendre collocation (order 4), solved by :func:`implicit_rk`."""
-    return implicit_rk(hamilton, q, p, h, params, _GAUSS4_A, _GAUSS4_B)
+def tableau_step(tableau: ButcherTableau) -> LazyKernel:
+    """The step function of a Runge-Kutta method, made from its tableau.
 
+    An explicit tableau is stepped by :func:`explicit_rk`, an implicit one by
+    :func:`implicit_rk`. The coefficients are closed over, so Numba compiles
+    them in as constants (and its disk cache tells tableaus apart by them);
+    the evaluation count comes from the number of stages.
+    """
+    a, b, stages = tableau.a, tableau.b, tableau.stages
+    if tableau.explicit:
 
-@jit_step
-def glrk8_step(hamilton, acceleration, q, p, h, params, separable):
-    """Four-stage Gauss-Legendre collocation (order 8), solved by :func:`implicit_rk`."""
-    return implicit_rk(hamilton, q, p, h, params, _GAUSS8_A, _GAUSS8_B)
+        def explicit_tableau_step(hamilton, acceleration, q, p, h, params, separable):
+            """One step of an explicit Runge-Kutta method: ``stages`` evaluations."""
+            q1, p1 = explicit_rk(hamilton, q, p, h, params, a, b)
+            return q1, p1, 0, stages
+
+        return jit_step(explicit_tableau_step)
+
+    def implicit_tableau_step(hamilton, acceleration, q, p, h, params, separable):
+        """One step of an implicit Runge-Kutta method (stages by fixed-point iteration)."""
+        return implicit_rk(hamilton, q, p, h, params, a, b)
+
+    return jit_step(implicit_tableau_step)
 
 
 # --------------------------------------------------------------------------- the report's methods
@@ -506,6 +440,9 @@ run = LazyKernel(RUN, _run, cache=True, nogil=True)
 class Method:
     """An integrator: its properties and its compiled one-step map.
 
+    Build a Runge-Kutta method with :meth:`from_tableau`, which derives every
+    property from the tableau.
+
     Attributes
     ----------
     name : str
@@ -522,6 +459,8 @@ class Method:
     kernel : LazyKernel
         The step function (see the module docstring); ``kernel.py_func`` is
         its Python source, ``kernel.compiled`` the machine code.
+    tableau : ButcherTableau or None
+        The Butcher tableau of a Runge-Kutta method.
     """
 
     name: str
@@ -531,6 +470,18 @@ class Method:
     variables: str
     summary: str
     kernel: object = field(repr=False)
+    tableau: ButcherTableau | None = field(default=None, repr=False)
+
+    @classmethod
+    def from_tableau(cls, name: str, tableau: ButcherTableau, summary: str) -> Method:
+        """The Runge-Kutta method of ``tableau`` on ``(q, p)``; nothing typed but the name.
+
+        Order, implicitness and symplecticity come from the tableau
+        (:class:`~pendulum_lab.tableau.ButcherTableau`), the step function from
+        :func:`tableau_step`.
+        """
+        return cls(name, tableau.order, tableau.symplectic_condition().holds,
+                   not tableau.explicit, "canonical", summary, tableau_step(tableau), tableau)
 
     def __str__(self) -> str:
         return self.name
@@ -539,19 +490,22 @@ class Method:
 METHODS: dict[str, Method] = {
     m.name: m
     for m in [
-        Method("explicit_euler", 1, False, False, "canonical",
-               "explicit Euler: y1 = y + h f(y)", explicit_euler_step),
+        Method.from_tableau("explicit_euler", ButcherTableau(a=[[0.0]], b=[1.0]),
+                            "explicit Euler: y1 = y + h f(y)"),
         Method("semi_implicit_euler", 1, True, True, "canonical",
                "symplectic Euler in (theta, p): implicit in p1 unless H is separable",
                semi_implicit_euler_step),
         Method("leapfrog", 2, True, True, "canonical",
                "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step),
-        Method("rk4", 4, False, False, "canonical",
-               "classical fourth-order Runge-Kutta", rk4_step),
-        Method("glrk4", 4, True, True, "canonical",
-               "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)", glrk4_step),
-        Method("glrk8", 8, True, True, "canonical",
-               "four-stage Gauss-Legendre collocation (order 8, implicit)", glrk8_step),
+        Method.from_tableau("rk4", ButcherTableau(a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0],
+                                                     [0, 0, 1, 0]], b=[1 / 6, 1 / 3, 1 / 3, 1 / 6]),
+                            "classical fourth-order Runge-Kutta"),
+        # The course report's method (section 2.4.5): c = 1/2 -+ sqrt(3)/6, order 4.
+        Method.from_tableau("glrk4", gauss_legendre_tableau(2),
+                            "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)"),
+        # Four stages, order 8: far fewer steps where high accuracy is wanted.
+        Method.from_tableau("glrk8", gauss_legendre_tableau(4),
+                            "four-stage Gauss-Legendre collocation (order 8, implicit)"),
         Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
                "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
                semi_implicit_euler_velocity_step),
@@ -560,6 +514,11 @@ METHODS: dict[str, Method] = {
                leapfrog_velocity_step),
     ]
 }
+# The tableaus by name, for notebooks and tests (the registry holds them).
+EULER_TABLEAU = METHODS["explicit_euler"].tableau
+RK4_TABLEAU = METHODS["rk4"].tableau
+GAUSS4_TABLEAU = METHODS["glrk4"].tableau
+GAUSS8_TABLEAU = METHODS["glrk8"].tableau
 
 MAIN_METHODS = ("explicit_euler", "semi_implicit_euler", "leapfrog", "rk4", "glrk4")
 
