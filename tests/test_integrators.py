@@ -263,7 +263,7 @@ def test_gauss_step_solves_the_collocation_equations(name, tableau):
 
     def f(y):
         dq, dp = np.empty(2), np.empty(2)
-        field.hamilton(y[:2].copy(), y[2:].copy(), field.params, dq, dp)
+        field.hamilton(0.0, y[:2].copy(), y[2:].copy(), field.params, dq, dp)
         return np.concatenate([dq, dp])
 
     y = np.concatenate([q, p])

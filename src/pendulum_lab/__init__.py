@@ -14,9 +14,9 @@ Quick start
 True
 """
 
-from .integrators import METHODS, ConvergenceError, Method, get_method
+from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
 from .mechanics import Chain, derive_chain
-from .model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .simulate import Trajectory, hamiltonian_field, simulate, step
 
 __version__ = "0.1.0"
@@ -35,6 +35,7 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
+    "CONFORMAL_METHODS",
     "METHODS",
     "Chain",
     "ConvergenceError",
@@ -43,6 +44,7 @@ __all__ = [
     "Trajectory",
     "derive_chain",
     "double_pendulum",
+    "driven_pendulum",
     "get_method",
     "hamiltonian_field",
     "n_pendulum",

@@ -15,6 +15,7 @@ from . import _validation as check
 from . import codegen
 from .integrators import (
     CALLS,
+    CONFORMAL_METHODS,
     MAX_SWEEPS,
     METHODS,
     NOT_CONVERGED,
@@ -28,8 +29,10 @@ from .integrators import (
     Method,
     get_method,
     run,
+    suitable_methods,
+    unsuitability,
 )
-from .model import PendulumModel, check_model, n_pendulum
+from .model import PendulumModel, check_model, driven_pendulum, n_pendulum
 
 __all__ = ["Trajectory", "hamiltonian_field", "simulate", "step", "warm_up"]
 
@@ -49,6 +52,7 @@ class Trajectory:
     Attributes
     ----------
     t : ndarray, shape (N+1,)
+        Times, from the start time ``t0``.
     theta, omega, p : ndarray, shape (N+1, ..., n)
         Angles, angular velocities and canonical momenta (``...`` is the
         ensemble shape of the initial state, empty for one trajectory).
@@ -94,30 +98,54 @@ class Trajectory:
 
 
 @functools.lru_cache(maxsize=64)
-def _field(n: int, params: tuple, separable: bool) -> HamiltonianField:
-    kernels = codegen.load_kernels(n)
+def _field(n: int, forced: bool, params: tuple, separable: bool,
+           damping_rate: float) -> HamiltonianField:
+    kernels = codegen.load_kernels(n, forced)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
-                            np.array(params, dtype=float), separable)
+                            np.array(params, dtype=float), separable, damping_rate)
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
-    """The model's compiled Hamiltonian vector field, as the integrators expect it."""
-    return _field(model.n, (*model.masses, *model.lengths, model.g), model.separable)
+    """The model's compiled vector field (Hamiltonian, plus its forces), as integrators see it."""
+    rate = model.conformal_damping_rate
+    return _field(model.n, model.forced, tuple(model.parameter_values.values()), model.separable,
+                  np.nan if rate is None else rate)
+
+
+def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianField):
+    """A ``ValueError`` naming the method and the reason if it cannot integrate ``model``."""
+    reason = unsuitability(method, field.damping_rate)
+    if reason is None:
+        return
+    if model.conformal_damping_rate is None:
+        reason += (f"; joint damping on a chain of {model.n} links gives dp/dt = -H_q - "
+                   "C M(theta)^-1 p, whose contraction rate depends on theta, so it is not "
+                   "conformal (conformal methods take one link)")
+    raise ValueError(f"`method` {method.name!r} cannot integrate this model (damping "
+                     f"{model.damping}): {reason}. Methods that can: "
+                     f"{suitable_methods(field.damping_rate)}")
 
 
 def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_step,
-             save_every, saved_q, saved_p, stats):
+             save_every, saved_q, saved_p, stats, t0: float = 0.0):
     """Run the compiled time loop on rows ``q, p`` of shape ``(K, n)``, in place.
 
-    Large ensembles are split into one slice per core; the compiled loop
-    releases the GIL, so the slices run in parallel threads.
+    Step ``s`` (counted from 1 over the whole run, ``first_step`` before this
+    call) starts at time ``t0 + (s - 1) h``. ``field.params`` and
+    ``field.damping_rate`` may hold one row per member (shapes ``(K, P)``,
+    ``(K,)``). Large ensembles are split into one slice per core; the compiled
+    loop releases the GIL, so the slices run in parallel threads.
     """
     loop, step_kernel = run.compiled, method.kernel.compiled  # compile before any threads
+    params = np.atleast_2d(np.asarray(field.params, dtype=float))
+    rates = np.atleast_1d(np.asarray(field.damping_rate, dtype=float))
+    per_member = params.shape[0] > 1
 
     def advance(rows):
-        loop(step_kernel, field.hamilton, field.acceleration, field.separable, q[rows],
-             p[rows], float(h), n_steps, first_step, save_every, field.params, saved_q[rows],
-             saved_p[rows], stats[rows])
+        loop(step_kernel, field.hamilton, field.acceleration, field.separable,
+             rates[rows] if per_member else rates, q[rows], p[rows], float(t0), float(h),
+             n_steps, first_step, save_every, params[rows] if per_member else params,
+             saved_q[rows], saved_p[rows], stats[rows])
 
     members, workers = q.shape[0], os.cpu_count() or 1
     if members < PARALLEL_MIN_MEMBERS or workers == 1:
@@ -133,13 +161,14 @@ def _pool(workers: int) -> ThreadPoolExecutor:
     return ThreadPoolExecutor(workers, thread_name_prefix="pendulum_lab")
 
 
-def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """One step of ``method`` in canonical variables ``(theta, p)``.
+def step(model: PendulumModel, method, q0, p0, dt: float, *, t0: float = 0.0
+         ) -> tuple[np.ndarray, np.ndarray]:
+    """One step of ``method`` in canonical variables ``(theta, p)``, from time ``t0``.
 
     ``q0`` and ``p0`` have shape ``(n,)`` or ``(..., n)``. The velocity-variable
     methods are converted ``p -> omega`` before and back after their step, so
     all methods can be compared as maps of ``(theta, p)``. A negative ``dt``
-    steps backwards.
+    steps backwards. ``t0`` matters for a driven model only.
 
     Raises
     ------
@@ -162,6 +191,9 @@ def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, n
     dt = check.real_number("dt", dt)
     if dt == 0:
         raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
+    t0 = check.real_number("t0", t0)
+    field = hamiltonian_field(model)
+    _check_method_fits(model, method, field)
     shape = q0.shape
     # Copies: the compiled loop updates its arguments in place.
     q = q0.reshape(-1, model.n).copy()
@@ -170,7 +202,7 @@ def step(model: PendulumModel, method, q0, p0, dt: float) -> tuple[np.ndarray, n
         y = np.ascontiguousarray(model.velocities(q, y))
     unused = np.empty((q.shape[0], 1, model.n))
     stats = np.zeros((q.shape[0], 4), dtype=np.int64)
-    _advance(method, hamiltonian_field(model), q, y, dt, 1, 0, 2, unused, unused, stats)
+    _advance(method, field, q, y, dt, 1, 0, 2, unused, unused, stats, t0=t0)
     if np.any(stats[:, STATUS] == NOT_CONVERGED):
         raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
                                f"within {MAX_SWEEPS} iterations (dt = {dt:g})")
@@ -200,8 +232,9 @@ def simulate(
     p0=None,
     save_every: int = 1,
     progress: bool | None = None,
+    t0: float = 0.0,
 ) -> Trajectory:
-    """Integrate the pendulum from ``(theta0, omega0)`` over ``[0, t_end]``.
+    """Integrate the pendulum from ``(theta0, omega0)`` at time ``t0`` to ``t_end``.
 
     Parameters
     ----------
@@ -210,11 +243,14 @@ def simulate(
         Initial angles [rad] and angular velocities [rad/s]. Leading axes
         make an ensemble, integrated together.
     t_end : float
-        Final time, ``t_end >= dt``; the run takes ``floor(t_end / dt)`` steps.
+        Final time, ``t_end >= t0 + dt``; the run takes ``floor((t_end - t0) / dt)``
+        steps.
     dt : float
         Step size, ``> 0``.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS`.
+        A key of :data:`pendulum_lab.METHODS` (or of ``CONFORMAL_METHODS``).
+        On a damped model the methods that assume a Hamiltonian
+        (``semi_implicit_euler``, ``leapfrog``) raise a ``ValueError``.
     p0 : array_like, shape like ``theta0``, optional
         Initial canonical momenta, instead of ``omega0`` (give exactly one):
         restarting from a saved ``(theta, p)`` then involves no conversion.
@@ -222,6 +258,9 @@ def simulate(
         Keep every ``save_every``-th state (memory for long runs and ensembles).
     progress : bool, optional
         Show a progress bar; by default only for long runs.
+    t0 : float
+        Start time: the time of ``theta0``, ``omega0`` (the drive of a driven
+        model depends on it).
 
     Returns
     -------
@@ -260,12 +299,15 @@ def simulate(
             f"`theta0` and `{name}` must have the same shape, got {theta0.shape} and {start.shape}"
         )
     dt = check.positive_number("dt", dt)
-    t_end = check.positive_number("t_end", t_end)
-    if t_end < dt:
-        raise ValueError(f"`t_end` must be at least `dt` ({dt}), got {t_end}")
+    t0 = check.real_number("t0", t0)
+    t_end = check.real_number("t_end", t_end)
+    if t_end - t0 < dt:
+        raise ValueError(f"`t_end` must be at least `t0` + `dt` ({t0:g} + {dt:g}), got {t_end}")
     save_every = check.integer_at_least("save_every", save_every, 1)
+    field = hamiltonian_field(model)
+    _check_method_fits(model, method, field)
 
-    n_steps = int(np.floor(t_end / dt * (1 + 1e-12)))
+    n_steps = int(np.floor((t_end - t0) / dt * (1 + 1e-12)))
     n_saved = n_steps // save_every + 1
     canonical = method.variables == "canonical"
     batch_shape = theta0.shape[:-1]
@@ -282,7 +324,6 @@ def simulate(
     saved_y = np.full((members, n_saved, model.n), np.nan)
     saved_q[:, 0], saved_y[:, 0] = q, y
     stats = np.zeros((members, 4), dtype=np.int64)
-    field = hamiltonian_field(model)
 
     # The compiled loop runs in chunks only so that a progress bar can move.
     chunk = max(1, min(n_steps, CHUNK_WORK // members))
@@ -291,7 +332,8 @@ def simulate(
     try:
         for first in range(0, n_steps, chunk):
             todo = min(chunk, n_steps - first)
-            _advance(method, field, q, y, dt, todo, first, save_every, saved_q, saved_y, stats)
+            _advance(method, field, q, y, dt, todo, first, save_every, saved_q, saved_y, stats,
+                     t0=t0)
             if bar is not None:
                 bar.update(todo)
             if np.all(stats[:, STATUS] != RUNNING):
@@ -308,7 +350,8 @@ def simulate(
         member = f", ensemble member {np.unravel_index(k, batch_shape)}" if batch_shape else ""
         raise ConvergenceError(
             f"{method.name}: the implicit equations did not converge within {MAX_SWEEPS} "
-            f"iterations at step {at} (t = {at * dt:.6g}, dt = {dt:g}{member}); use a smaller dt"
+            f"iterations at step {at} (t = {t0 + at * dt:.6g}, dt = {dt:g}{member}); use a "
+            "smaller dt"
         )
     blown = stats[:, STATUS] == NOT_FINITE
     completed = not np.any(blown)
@@ -317,7 +360,7 @@ def simulate(
         first_bad = int(np.min(stats[blown, STEPS])) + 1
         warnings.warn(
             f"{method.name}: the state became non-finite at step {first_bad} "
-            f"(t = {first_bad * dt:.6g}) in {int(blown.sum())} of {members} trajectories; "
+            f"(t = {t0 + first_bad * dt:.6g}) in {int(blown.sum())} of {members} trajectories; "
             + ("the trajectory stops there. " if not batch_shape
                else "those trajectories hold NaN from there on. ")
             + "Try a smaller dt.",
@@ -338,7 +381,7 @@ def simulate(
         kinetic = model.kinetic_energy(theta, omega)
         potential = model.potential_energy(theta)
     return Trajectory(
-        t=np.arange(kept) * (save_every * dt),
+        t=t0 + np.arange(kept) * (save_every * dt),
         theta=theta,
         omega=omega,
         p=p,
@@ -365,9 +408,11 @@ def warm_up(links=(1, 2), methods=None, progress: bool = True) -> float:
     Parameters
     ----------
     links : sequence of int
-        Chain lengths to prepare (1: simple pendulum, 2: double pendulum, ...).
+        Chain lengths to prepare (1: simple pendulum, 2: double pendulum, ...);
+        with 1, the driven pendulum's kernels too.
     methods : sequence of str, optional
-        Method names; all of :data:`pendulum_lab.METHODS` by default.
+        Method names; all of :data:`pendulum_lab.METHODS` and
+        ``CONFORMAL_METHODS`` by default.
     progress : bool
         Show a progress bar.
 
@@ -376,7 +421,8 @@ def warm_up(links=(1, 2), methods=None, progress: bool = True) -> float:
     float
         Seconds spent.
     """
-    names = [get_method(m).name for m in (METHODS if methods is None else methods)]
+    everything = [*METHODS, *CONFORMAL_METHODS]
+    names = [get_method(m).name for m in (everything if methods is None else methods)]
     links = [check.integer_at_least("links", n, 1) for n in links]
     start = time.perf_counter()
     jobs = [(n, name) for n in links for name in names]
@@ -386,4 +432,6 @@ def warm_up(links=(1, 2), methods=None, progress: bool = True) -> float:
         jobs = tqdm(jobs, desc="compiling kernels", unit="kernel")
     for n, name in jobs:
         simulate(n_pendulum(n), np.full(n, 0.1), np.zeros(n), t_end=0.01, dt=0.01, method=name)
+    if 1 in links:  # the step kernels take any field: one run compiles the forced field
+        simulate(driven_pendulum(), [0.1], [0.0], t_end=0.01, dt=0.01, method=names[0])
     return time.perf_counter() - start
