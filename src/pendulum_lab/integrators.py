@@ -75,9 +75,9 @@ __all__ = [
     "fixed_point_status",
     "gauss_legendre_tableau",
     "get_method",
-    "hamiltonian_part",
     "implicit_kick",
     "implicit_rk",
+    "remove_damping",
     "run",
     "suitable_methods",
     "tableau_step",
@@ -285,13 +285,16 @@ def implicit_rk(hamilton, t, q, p, h, params, a, b, c):
     return q1, p1, sweeps, calls
 
 
-def tableau_step(tableau: ButcherTableau) -> LazyKernel:
-    """The step function of a Runge-Kutta method, made from its tableau.
+def tableau_step(tableau: ButcherTableau, name: str) -> LazyKernel:
+    """The step function of the Runge-Kutta method ``name``, made from its tableau.
 
     An explicit tableau is stepped by :func:`explicit_rk`, an implicit one by
     :func:`implicit_rk`. The coefficients are closed over, so Numba compiles
-    them in as constants (and its disk cache tells tableaus apart by them);
-    the evaluation count comes from the number of stages.
+    them in as constants; the evaluation count comes from the number of
+    stages. Each method's step is named ``<name>_step``: Numba names its
+    machine code and its disk cache after the function, and closures sharing
+    one name could be mixed up when some are loaded from the cache and others
+    compiled in the same process (numba/numba#5128).
     """
     a, b, c, stages = tableau.a, tableau.b, tableau.c, tableau.stages
     if tableau.explicit:
@@ -302,36 +305,39 @@ def tableau_step(tableau: ButcherTableau) -> LazyKernel:
             q1, p1 = explicit_rk(hamilton, t, q, p, h, params, a, b, c)
             return q1, p1, 0, stages
 
-        return jit_step(explicit_tableau_step)
+        step = explicit_tableau_step
+    else:
 
-    def implicit_tableau_step(hamilton, acceleration, t, q, p, h, params, separable,
-                              damping_rate):
-        """One step of an implicit Runge-Kutta method (stages by fixed-point iteration)."""
-        return implicit_rk(hamilton, t, q, p, h, params, a, b, c)
+        def implicit_tableau_step(hamilton, acceleration, t, q, p, h, params, separable,
+                                  damping_rate):
+            """One step of an implicit Runge-Kutta method (stages by fixed-point iteration)."""
+            return implicit_rk(hamilton, t, q, p, h, params, a, b, c)
 
-    return jit_step(implicit_tableau_step)
+        step = implicit_tableau_step
+    step.__name__ = step.__qualname__ = f"{name}_step"
+    return jit_step(step)
 
 
 # --------------------------------------------------------------------------- symplectic methods
 @numba.njit(cache=True)
-def hamiltonian_part(hamilton, t, q, p, params, damping_rate, dq, dp):
-    """``dq = H_p``, ``dp = -H_q``: the field without its damping ``-damping_rate p``.
+def remove_damping(p, damping_rate, dp):
+    """``dp += damping_rate p``: from a conformal field's ``dp/dt`` to its Hamiltonian part's.
 
     A conformal Hamiltonian field has ``dp/dt = -H_q - gamma p`` [MP]; the
-    symplectic steps below integrate its Hamiltonian part. For a Hamiltonian
-    field (``damping_rate = 0``) this is the field itself.
+    symplectic steps below integrate ``-H_q`` and leave the damping to the
+    conformal methods' exact flow. They call this only when ``gamma != 0``
+    (a function call per evaluation would cost Hamiltonian fields 10 %).
     """
-    hamilton(t, q, p, params, dq, dp)
-    if damping_rate != 0.0:
-        for i in range(p.size):
-            dp[i] += damping_rate * p[i]
+    for i in range(p.size):
+        dp[i] += damping_rate * p[i]
 
 
 @numba.njit(cache=True)
 def implicit_kick(hamilton, t, q, p, k, params, separable, damping_rate, dq, dp):
     """Solve ``p_k = p - k H_q(t, q, p_k)`` for ``p_k``: the implicit momentum update.
 
-    Starts from ``p + k dp``, so ``dp`` must hold ``-H_q(t, q, p)`` on entry;
+    Starts from ``p + k dp``, so ``dp`` must hold ``-H_q(t, q, p)`` on entry
+    (see :func:`remove_damping` for ``damping_rate``);
     the guess is exact when ``H`` is separable. Otherwise iterates
     ``p_k <- p + k dp(t, q, p_k)`` until :func:`fixed_point_status` finds
     round-off. ``dq``, ``dp`` are workspace. Returns ``(p_k, sweeps)``, with
@@ -343,7 +349,9 @@ def implicit_kick(hamilton, t, q, p, k, params, separable, damping_rate, dq, dp)
     smallest, status, sweeps = np.full(p.size, np.inf), 0, 0
     while status == 0 and sweeps < MAX_SWEEPS:
         sweeps += 1
-        hamiltonian_part(hamilton, t, q, p_k, params, damping_rate, dq, dp)
+        hamilton(t, q, p_k, params, dq, dp)
+        if damping_rate != 0.0:
+            remove_damping(p_k, damping_rate, dp)
         p_new = p + k * dp
         status = fixed_point_status(p_new, p_k, smallest)
         p_k = p_new
@@ -358,11 +366,13 @@ def symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate):
     ``q1 = q + h H_p(t, q, p1)``
     """
     dq, dp = np.empty_like(q), np.empty_like(p)
-    hamiltonian_part(hamilton, t, q, p, params, damping_rate, dq, dp)
+    hamilton(t, q, p, params, dq, dp)
+    if damping_rate != 0.0:
+        remove_damping(p, damping_rate, dp)
     p1, sweeps = implicit_kick(hamilton, t, q, p, h, params, separable, damping_rate, dq, dp)
     if sweeps < 0:
         return q, p, -1, 1 + MAX_SWEEPS
-    hamiltonian_part(hamilton, t, q, p1, params, damping_rate, dq, dp)
+    hamilton(t, q, p1, params, dq, dp)  # only dq = H_p is used
     return q + h * dq, p1, sweeps, sweeps + 2
 
 
@@ -375,13 +385,15 @@ def stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate):
     ``p1 = p_half - h/2 H_q(t + h, q1, p_half)``                    (explicit)
     """
     dq, dp = np.empty_like(q), np.empty_like(p)
-    hamiltonian_part(hamilton, t, q, p, params, damping_rate, dq, dp)
+    hamilton(t, q, p, params, dq, dp)
+    if damping_rate != 0.0:
+        remove_damping(p, damping_rate, dp)
     p_half, sweeps = implicit_kick(hamilton, t, q, p, 0.5 * h, params, separable, damping_rate,
                                    dq, dp)
     if sweeps < 0:
         return q, p, -1, 1 + MAX_SWEEPS
     calls = 1 + sweeps
-    hamiltonian_part(hamilton, t, q, p_half, params, damping_rate, dq, dp)
+    hamilton(t, q, p_half, params, dq, dp)  # only dq = H_p is used
     drift = q + 0.5 * h * dq
     q1 = q + h * dq  # exact when H is separable, else the first guess
     calls += 1
@@ -389,14 +401,16 @@ def stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate):
         smallest, status, first_sweeps = np.full(q.size, np.inf), 0, sweeps
         while status == 0 and sweeps - first_sweeps < MAX_SWEEPS:
             sweeps += 1
-            hamiltonian_part(hamilton, t + h, q1, p_half, params, damping_rate, dq, dp)
+            hamilton(t + h, q1, p_half, params, dq, dp)
             q_new = drift + 0.5 * h * dq
             status = fixed_point_status(q_new, q1, smallest)
             q1 = q_new
         calls += sweeps - first_sweeps
         if status != 1:
             return q, p, -1, calls
-    hamiltonian_part(hamilton, t + h, q1, p_half, params, damping_rate, dq, dp)
+    hamilton(t + h, q1, p_half, params, dq, dp)
+    if damping_rate != 0.0:
+        remove_damping(p_half, damping_rate, dp)
     return q1, p_half + 0.5 * h * dp, sweeps, calls + 1
 
 
@@ -587,7 +601,7 @@ class Method:
         :func:`tableau_step`. A Runge-Kutta method integrates any field.
         """
         return cls(name, tableau.order, tableau.symplectic_condition().holds,
-                   not tableau.explicit, "canonical", summary, tableau_step(tableau),
+                   not tableau.explicit, "canonical", summary, tableau_step(tableau, name),
                    tableau=tableau)
 
     def __str__(self) -> str:
