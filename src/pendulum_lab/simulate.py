@@ -302,7 +302,8 @@ def simulate(
     t0 = check.real_number("t0", t0)
     t_end = check.real_number("t_end", t_end)
     if t_end - t0 < dt:
-        raise ValueError(f"`t_end` must be at least `t0` + `dt` ({t0:g} + {dt:g}), got {t_end}")
+        after = f" after `t0` ({t0:g})" if t0 else ""
+        raise ValueError(f"`t_end` must be at least `dt` ({dt}){after}, got {t_end}")
     save_every = check.integer_at_least("save_every", save_every, 1)
     field = hamiltonian_field(model)
     _check_method_fits(model, method, field)
