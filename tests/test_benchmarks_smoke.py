@@ -27,6 +27,14 @@ def suite():
 
 
 @pytest.fixture(scope="module")
+def long_run(suite):
+    with pytest.MonkeyPatch.context() as mp:
+        mp.syspath_prepend(str(BENCHMARKS))
+        import item_long_run as module
+    return module
+
+
+@pytest.fixture(scope="module")
 def run(suite):
     with pytest.MonkeyPatch.context() as mp:
         mp.syspath_prepend(str(BENCHMARKS))
@@ -87,19 +95,19 @@ def test_c_loop_does_the_same_arithmetic_as_simulate(suite, tmp_path):
     assert np.max(np.abs(q_short - traj.theta[-1])) > 1e-6
 
 
-def test_search_finds_the_largest_passing_value(suite):
+def test_search_finds_the_largest_passing_value(long_run):
     calls = []
 
     def error(x):
         calls.append(x)
         return x**4, {}
 
-    best, trials = suite._largest_passing(error, 0.02, 4, 1e-8, precision=1.05, max_trials=12)
+    best, trials = long_run._largest_passing(error, 0.02, 4, 1e-8, precision=1.05, max_trials=12)
     assert best[0] <= 0.01 * (1 + 1e-12)
     assert best[0] > 0.01 / 1.05
     assert len(trials) == len(calls)
     # Negative control: an error that never meets the tolerance gives no answer.
-    best, _ = suite._largest_passing(lambda x: (1.0, {}), 0.02, 4, 1e-8, 1.05, max_trials=5)
+    best, _ = long_run._largest_passing(lambda x: (1.0, {}), 0.02, 4, 1e-8, 1.05, max_trials=5)
     assert best is None
 
 

@@ -23,9 +23,9 @@ def test_ensemble_agrees_with_one_simulate_call_and_keeps_only_what_is_asked():
     theta0 = np.array([[0.1, 0.2], [0.5, -0.3], [1.0, 0.8]])  # regular orbits
     omega0 = np.zeros_like(theta0)
     ref = pl.simulate(DP, theta0, omega0, t_end=30.005, dt=0.01, method="glrk4", save_every=7)
-    final = chaos.ensemble(DP, theta0, omega0, t_end=30.005, dt=0.01, method="glrk4")
-    thinned = chaos.ensemble(
-        DP, theta0, omega0, t_end=30.005, dt=0.01, method="glrk4", keep="thinned", every=7
+    final = pl.simulate(DP, theta0, omega0, t_end=30.005, dt=0.01, method="glrk4", keep="final")
+    thinned = pl.simulate(
+        DP, theta0, omega0, t_end=30.005, dt=0.01, method="glrk4", save_every=7
     )
     assert final.t.tolist() == [0.0, pytest.approx(30.0)]
     assert final.theta.shape == (2, 3, 2) and final.energy.shape == (2, 3)
@@ -35,19 +35,19 @@ def test_ensemble_agrees_with_one_simulate_call_and_keeps_only_what_is_asked():
     assert np.max(np.abs(thinned.theta - ref.theta)) < 1e-10
     assert np.max(np.abs(thinned.p - ref.p)) < 1e-10
     # Negative control: the same comparison at another step size is far off.
-    coarse = chaos.ensemble(DP, theta0, omega0, t_end=30.0, dt=0.02, method="glrk4")
+    coarse = pl.simulate(DP, theta0, omega0, t_end=30.0, dt=0.02, method="glrk4", keep="final")
     assert np.max(np.abs(coarse.theta[-1] - direct.theta[-1])) > 1e-8
 
 
 def test_ensemble_rejects_bad_arguments():
     with pytest.raises(ValueError, match="`keep`"):
-        chaos.ensemble(DP, CHAOTIC, REST, t_end=1.0, keep="all")
-    with pytest.raises(ValueError, match="`every`"):
-        chaos.ensemble(DP, CHAOTIC, REST, t_end=1.0, keep="thinned", every=0)
+        pl.simulate(DP, CHAOTIC, REST, t_end=1.0, keep="thinned")
+    with pytest.raises(ValueError, match="`save_every`"):
+        pl.simulate(DP, CHAOTIC, REST, t_end=1.0, save_every=0)
     with pytest.raises(ValueError, match="`theta0`"):
-        chaos.ensemble(DP, [1.0, 2.0, 3.0], [0.0, 0.0, 0.0], t_end=1.0)
+        pl.simulate(DP, [1.0, 2.0, 3.0], [0.0, 0.0, 0.0], t_end=1.0, keep="final")
     with pytest.raises(TypeError, match="`model`"):
-        chaos.ensemble("double", CHAOTIC, REST, t_end=1.0)
+        pl.simulate("double", CHAOTIC, REST, t_end=1.0, keep="final")
 
 
 # --------------------------------------------------------------------------- separation
@@ -109,8 +109,8 @@ def test_regular_motion_has_an_exponent_decreasing_towards_zero(model, theta0):
 def test_lyapunov_rejects_a_run_shorter_than_one_interval():
     with pytest.raises(ValueError, match="`t_end`"):
         chaos.lyapunov_benettin(DP, CHAOTIC, REST, t_end=0.1, dt=0.01, renormalize_every=50)
-    with pytest.raises(ValueError, match="`record_every`"):
-        chaos.lyapunov_variational(DP, CHAOTIC, REST, t_end=1.0, record_every=0)
+    with pytest.raises(ValueError, match="`save_every`"):
+        chaos.lyapunov_variational(DP, CHAOTIC, REST, t_end=1.0, save_every=0)
 
 
 # --------------------------------------------------------------------------- Poincare sections

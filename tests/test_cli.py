@@ -212,10 +212,10 @@ def test_python_dash_m_runs_the_same_parser():
 def test_warmup_compiles_the_requested_kernels(capsys):
     from pendulum_lab import cli
 
-    assert cli.main(["warmup", "--links", "1"]) == 0
+    assert cli.main(["warmup", "--n", "1"]) == 0
     assert "chains of [1] link(s)" in capsys.readouterr().out
     with pytest.raises(SystemExit):
-        cli.main(["warmup", "--links", "x"])
+        cli.main(["warmup", "--n", "x"])
 
 
 def test_running_as_root_adds_allow_root_once(course):

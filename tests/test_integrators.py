@@ -83,12 +83,12 @@ def test_method_registry_properties():
 # ---------------------------------------------------------------- order
 @pytest.fixture(scope="module")
 def dp_reference():
-    return analysis.reference_solution(DP, [0.8, 1.2], [0.0, 0.0], 1.0)
+    return analysis.reference_solution(DP, [0.8, 1.2], [0.0, 0.0], t_end=1.0)
 
 
 @pytest.fixture(scope="module")
 def sp_reference():
-    return analysis.reference_solution(SP, [1.2], [0.0], 1.0)
+    return analysis.reference_solution(SP, [1.2], [0.0], t_end=1.0)
 
 
 ORDER_DTS = (0.01, 0.005, 0.0025, 0.00125)
@@ -96,14 +96,14 @@ ORDER_DTS = (0.01, 0.005, 0.0025, 0.00125)
 
 @pytest.mark.parametrize("name", MAIN_METHODS)
 def test_observed_order_double_pendulum(name, dp_reference):
-    result = analysis.observed_order(DP, name, [0.8, 1.2], [0.0, 0.0], 1.0, ORDER_DTS,
-                                     reference=dp_reference)
+    result = analysis.observed_order(DP, [0.8, 1.2], [0.0, 0.0], t_end=1.0, dts=ORDER_DTS,
+                                     method=name, reference=dp_reference)
     assert abs(result.slope - pl.METHODS[name].order) <= 0.15, result
 
 
 @pytest.mark.parametrize("name", MAIN_METHODS)
 def test_observed_order_simple_pendulum(name, sp_reference):
-    result = analysis.observed_order(SP, name, [1.2], [0.0], 1.0, ORDER_DTS,
+    result = analysis.observed_order(SP, [1.2], [0.0], t_end=1.0, dts=ORDER_DTS, method=name,
                                      reference=sp_reference)
     assert abs(result.slope - pl.METHODS[name].order) <= 0.15, result
 
@@ -116,7 +116,8 @@ ORDER8_DTS = (0.125, 0.1, 0.0625, 0.05)
 @pytest.mark.parametrize("model, theta0", [(DP, [0.5, 0.6]), (SP, [1.2])])
 def test_observed_order_glrk8(model, theta0):
     omega0 = np.zeros(model.n)
-    result = analysis.observed_order(model, "glrk8", theta0, omega0, 1.0, ORDER8_DTS)
+    result = analysis.observed_order(model, theta0, omega0, t_end=1.0, dts=ORDER8_DTS,
+                                     method="glrk8")
     assert abs(result.slope - 8) <= 0.3, result
     assert result.errors[-1] > 1e-13  # the fit stays above round-off
 
@@ -124,8 +125,8 @@ def test_observed_order_glrk8(model, theta0):
 def test_velocity_leapfrog_is_only_first_order_on_the_double_pendulum(dp_reference):
     # The report's leapfrog on (theta, omega) evaluates a velocity-dependent
     # acceleration at a half-step Euler velocity: it loses an order.
-    result = analysis.observed_order(DP, "leapfrog_velocity", [0.8, 1.2], [0.0, 0.0], 1.0,
-                                     ORDER_DTS, reference=dp_reference)
+    result = analysis.observed_order(DP, [0.8, 1.2], [0.0, 0.0], t_end=1.0, dts=ORDER_DTS,
+                                     method="leapfrog_velocity", reference=dp_reference)
     assert abs(result.slope - 1.0) <= 0.15, result
 
 
@@ -136,31 +137,33 @@ P0 = DP.momenta(Q0, [0.3, -0.2])
 
 @pytest.mark.parametrize("name", SYMPLECTIC)
 def test_symplectic_methods_preserve_the_symplectic_form(name):
-    assert analysis.symplecticity_defect(DP, name, Q0, P0, 0.05) <= 1e-8
+    assert analysis.symplecticity_defect(DP, Q0, p0=P0, dt=0.05, method=name) <= 1e-8
 
 
 @pytest.mark.parametrize("name", NOT_SYMPLECTIC)
 def test_non_symplectic_methods_fail_the_same_check(name):
-    worst_symplectic = max(analysis.symplecticity_defect(DP, m, Q0, P0, 0.05) for m in SYMPLECTIC)
-    defect = analysis.symplecticity_defect(DP, name, Q0, P0, 0.05)
+    worst_symplectic = max(
+        analysis.symplecticity_defect(DP, Q0, p0=P0, dt=0.05, method=m) for m in SYMPLECTIC
+    )
+    defect = analysis.symplecticity_defect(DP, Q0, p0=P0, dt=0.05, method=name)
     assert defect >= 100 * max(worst_symplectic, 1e-8)
 
 
 def test_velocity_methods_are_symplectic_for_the_simple_pendulum():
     # With a constant mass matrix (theta, omega) are canonical up to a factor.
     for name in ("semi_implicit_euler_velocity", "leapfrog_velocity"):
-        assert analysis.symplecticity_defect(SP, name, [2.0], [0.5], 0.05) <= 1e-8
+        assert analysis.symplecticity_defect(SP, [2.0], p0=[0.5], dt=0.05, method=name) <= 1e-8
 
 
 # ---------------------------------------------------------------- reversibility
 @pytest.mark.parametrize("name", ["leapfrog", "glrk4", "glrk8"])
 def test_symmetric_methods_are_reversible(name):
-    assert analysis.reversibility_error(DP, name, Q0, P0, 0.05) <= 1e-12
+    assert analysis.reversibility_error(DP, Q0, p0=P0, dt=0.05, method=name) <= 1e-12
 
 
 @pytest.mark.parametrize("name", ["rk4", "semi_implicit_euler"])
 def test_non_symmetric_methods_are_not_reversible(name):
-    assert analysis.reversibility_error(DP, name, Q0, P0, 0.05) > 1e-8
+    assert analysis.reversibility_error(DP, Q0, p0=P0, dt=0.05, method=name) > 1e-8
 
 
 # ---------------------------------------------------------------- long-run energy
@@ -184,7 +187,8 @@ def test_rk4_energy_error_grows(long_runs):
 # ---------------------------------------------------------------- against SciPy
 @pytest.mark.parametrize("name, dt, tol", [("rk4", 0.001, 1e-8), ("glrk4", 0.002, 1e-8)])
 def test_agreement_with_dop853(name, dt, tol):
-    theta_ref, omega_ref = analysis.reference_solution(DP, [1.0, 1.5], [0.0, 0.0], 5.0, 1e-12)
+    theta_ref, omega_ref = analysis.reference_solution(DP, [1.0, 1.5], [0.0, 0.0], t_end=5.0,
+                                                      rtol=1e-12)
     traj = pl.simulate(DP, [1.0, 1.5], [0.0, 0.0], t_end=5.0, dt=dt, method=name)
     assert np.max(np.abs(traj.theta[-1] - theta_ref)) < tol
     assert np.max(np.abs(traj.omega[-1] - omega_ref)) < tol * 10
@@ -275,10 +279,10 @@ def test_gauss_step_solves_the_collocation_equations(name, tableau):
     slopes = fsolve(residual, np.tile(f(y), stages), xtol=1e-14)
     assert np.max(np.abs(residual(slopes))) < 1e-11
     expected = y + h * tableau.b @ slopes.reshape(stages, 4)
-    q1, p1 = pl.step(DP, name, q, p, h)
+    q1, p1 = pl.step(DP, q, p0=p, dt=h, method=name)
     assert np.max(np.abs(np.concatenate([q1, p1]) - expected)) < 1e-12
     # negative control: an explicit method of the same order is a different map
-    q_rk, p_rk = pl.step(DP, "rk4", q, p, h)
+    q_rk, p_rk = pl.step(DP, q, p0=p, dt=h, method="rk4")
     assert np.max(np.abs(np.concatenate([q_rk, p_rk]) - expected)) > 1e-6
 
 
@@ -292,7 +296,7 @@ def test_symplectic_methods_are_explicit_for_the_separable_simple_pendulum():
 
 def test_simple_pendulum_symplectic_euler_is_the_textbook_update():
     q, p, h = np.array([0.7]), np.array([0.3]), 0.1
-    q1, p1 = pl.step(SP, "semi_implicit_euler", q, p, h)
+    q1, p1 = pl.step(SP, q, p0=p, dt=h, method="semi_implicit_euler")
     p_expected = p - h * 9.81 * np.sin(q)
     assert np.allclose(p1, p_expected, rtol=0, atol=1e-15)
     assert np.allclose(q1, q + h * p_expected, rtol=0, atol=1e-15)

@@ -99,8 +99,8 @@ def test_inputs_are_not_modified():
     p0 = DP.momenta(theta0, omega0)
     before = (theta0.copy(), omega0.copy(), p0.copy())
     pl.simulate(DP, theta0, omega0, t_end=0.1, dt=0.01, method="glrk4")
-    pl.step(DP, "glrk4", theta0, p0, 0.01)
-    pl.step(DP, "leapfrog_velocity", theta0, p0, 0.01)
+    pl.step(DP, theta0, p0=p0, dt=0.01, method="glrk4")
+    pl.step(DP, theta0, p0=p0, dt=0.01, method="leapfrog_velocity")
     for a, b in zip((theta0, omega0, p0), before):
         assert np.array_equal(a, b)
 
@@ -200,4 +200,4 @@ def test_model_argument_is_checked():
     with pytest.raises(TypeError, match="`model`"):
         pl.simulate("double", [1.0, 1.0], [0.0, 0.0])
     with pytest.raises(ValueError, match="`dt`"):
-        pl.step(DP, "rk4", [1.0, 1.0], [0.0, 0.0], 0.0)
+        pl.step(DP, [1.0, 1.0], p0=[0.0, 0.0], dt=0.0, method="rk4")

@@ -13,7 +13,7 @@ import sympy as sp
 from sympy.physics import mechanics as me
 
 import pendulum_lab as pl
-from pendulum_lab import analysis, chaos
+from pendulum_lab import analysis, timing
 from pendulum_lab.mechanics import is_identically_zero
 
 
@@ -60,8 +60,9 @@ def test_three_link_equations_agree_with_kanes_method():
 def test_symplectic_methods_keep_the_energy_error_bounded(n):
     model = pl.n_pendulum(n)
     theta0, omega0 = np.linspace(0.8, 0.4, n), np.zeros(n)
-    runs = chaos.compare_energy(
-        model, theta0, omega0, t_end=200.0, dt=0.01, methods=("glrk4", "leapfrog", "rk4"), every=10
+    runs = analysis.compare_energy(
+        model, theta0, omega0, t_end=200.0, dt=0.01, methods=("glrk4", "leapfrog", "rk4"),
+        save_every=10,
     )
     growth = runs.growth()
     worst = runs.max_relative_error()
@@ -86,10 +87,10 @@ def test_explicit_euler_energy_grows(n):
 
 
 def test_chain_costs_reports_each_chain():
-    rows = chaos.chain_costs((3,), t_end=0.1, dt=0.01, method="rk4")
+    rows = timing.chain_costs((3,), t_end=0.1, dt=0.01, method="rk4")
     assert [row.n for row in rows] == [3]
     row = rows[0]
     assert row.derivation > 0 and row.build >= 0 and row.first_simulation > 0
     assert 0 < row.per_step < row.first_simulation
     with pytest.raises(ValueError, match="`ns`"):
-        chaos.chain_costs((0,))
+        timing.chain_costs((0,))

@@ -75,12 +75,12 @@ def test_phase_plot_wraps_and_breaks_rotations(rotating):
 
 
 def test_arm_projections_one_panel_per_arm(dp_traj):
-    fig = plotting.plot_arm_projections(dp_traj)
+    fig = plotting.plot_link_projections(dp_traj)
     assert len(fig.axes) == 2
     for i, ax in enumerate(fig.axes):
         np.testing.assert_allclose(ax.lines[0].get_ydata(), dp_traj.omega[:, i])
     with pytest.raises(ValueError, match="axes"):
-        plotting.plot_arm_projections(dp_traj, axes=[fig.axes[0]])
+        plotting.plot_link_projections(dp_traj, axes=[fig.axes[0]])
 
 
 def test_phase_portrait_separatrix_is_the_saddle_level():
@@ -201,15 +201,17 @@ def test_linearized_solution_matches_small_motion_and_fails_for_large():
     for eq, start in (("down-down", [1e-3, -1e-3]), ("down-up", [1e-5, np.pi])):
         angles = np.array([0.0, 0.0 if eq == "down-down" else np.pi])
         traj = pl.simulate(DP, np.array(start), np.zeros(2), t_end=2.0, dt=0.01)
-        theta, omega = analysis.linearized_solution(DP, eq, traj.theta[0], traj.omega[0], t)
+        theta, omega = analysis.linearized_solution(DP, traj.theta[0], traj.omega[0], t=t,
+                                                    equilibrium=eq)
         size = np.max(np.abs(traj.theta - angles))  # how far the motion goes
         assert np.max(np.abs(theta - traj.theta)) < 1e-3 * size
         assert omega.shape == (201, 2)
     big = pl.simulate(DP, np.array([0.8, 0.0]), np.zeros(2), t_end=2.0, dt=0.01)
-    theta, _ = analysis.linearized_solution(DP, "down-down", big.theta[0], big.omega[0], t)
+    theta, _ = analysis.linearized_solution(DP, big.theta[0], big.omega[0], t=t,
+                                          equilibrium="down-down")
     assert np.max(np.abs(theta - big.theta)) > 0.05
     with pytest.raises(ValueError, match="equilibrium"):
-        analysis.linearized_solution(DP, "down", [0, 0], [0, 0], t)
+        analysis.linearized_solution(DP, [0, 0], [0, 0], t=t, equilibrium="down")
 
 
 def test_rest_state_at_energy():

@@ -1,13 +1,14 @@
 """The headless report: files, the summary table, its numbers, and argument errors."""
 
 import re
+from pathlib import Path
 
 import matplotlib.image
 import numpy as np
 import pytest
 
 import pendulum_lab as pl
-from pendulum_lab import analysis, report
+from pendulum_lab import analysis, plotting, report, source, tables
 
 T_END, DT = 2.0, 0.01
 METHODS = tuple(pl.METHODS)
@@ -65,7 +66,8 @@ def test_order_column_matches_the_analysis_function(short_report):
     dp = pl.double_pendulum()
     theta0 = report.PENDULUMS["double"][1]
     for name, nominal in (("rk4", 4), ("leapfrog", 2), ("leapfrog_velocity", 2)):
-        fit = analysis.observed_order(dp, name, theta0, [0.0, 0.0], 1.0, analysis.ORDER_DTS)
+        fit = analysis.observed_order(dp, theta0, [0.0, 0.0], t_end=1.0,
+                                      dts=analysis.ORDER_DTS, method=name)
         assert row(rows, "double", name)["observed order"] == f"{fit.slope:.2f}"
         if name == "leapfrog_velocity":
             # negative control: the report's leapfrog loses an order on the double pendulum
@@ -162,6 +164,31 @@ def test_out_must_be_given_and_be_a_folder(tmp_path, capsys):
     assert "is a file" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("where", ["proc", "inside_a_file"])
+def test_an_out_folder_that_cannot_be_made_gives_a_message_not_a_traceback(
+    tmp_path, capsys, where
+):
+    if where == "proc":
+        if not Path("/proc").is_dir():
+            pytest.skip("no /proc on this system")
+        out = "/proc/nope"
+    else:
+        (tmp_path / "file.txt").write_text("not a folder")
+        out = str(tmp_path / "file.txt" / "figures")
+    with pytest.raises(SystemExit) as exit_info:
+        report.main(["--out", out, "--quick", "--no-progress"])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2
+    assert f"`out` must be a folder that can be created, but '{out}' cannot be" in err
+    assert "Traceback" not in err
+    with pytest.raises(ValueError, match="`out` must be a folder that can be created"):
+        report.run_report(out, t_end=0.5, methods=["rk4"], pendulums=["simple"], progress=False)
+    # negative control: a folder that can be made is made, and nothing is refused
+    assert report.main(["--out", str(tmp_path / "fine"), "--t-end", "0.5", "--methods", "rk4",
+                        "--pendulums", "simple", "--no-progress"]) == 0
+    assert (tmp_path / "fine" / "summary.md").is_file()
+
+
 def test_python_api_names_the_bad_argument(tmp_path):
     with pytest.raises(ValueError, match="`methods` must be among"):
         report.run_report(tmp_path, methods=["rk5"])
@@ -190,16 +217,16 @@ def test_method_source_is_the_running_code_with_its_helpers(name, helper):
 
     kernel = pl.METHODS[name].kernel
     own = inspect.getsource(getattr(kernel, "py_func", kernel))
-    text = analysis.method_source(name)
+    text = source.method_source(name)
     assert text.startswith(own.rstrip())
     assert helper in text
-    assert helper not in analysis.method_source(name, helpers=False)
+    assert helper not in source.method_source(name, helpers=False)
     explicit = name in ("explicit_euler", "rk4")
     assert ("def fixed_point_status(" in text) is not explicit  # negative control
 
 
 def test_velocity_method_source_uses_the_acceleration():
-    text = analysis.method_source("leapfrog_velocity")
+    text = source.method_source("leapfrog_velocity")
     assert "acceleration(t + h, q1, v_half" in text and "hamilton(" not in text
 
 
@@ -219,31 +246,34 @@ def test_windowed_energy_error_takes_the_maximum_in_each_window():
 
 def test_work_precision_of_rk4_and_dop853():
     dp = pl.double_pendulum()
-    rk4 = analysis.work_precision(dp, "rk4", [1.0, 1.5], [0.0, 0.0], 2.0, [0.02, 0.01])
+    rk4 = analysis.work_precision(dp, [1.0, 1.5], [0.0, 0.0], t_end=2.0, dts=[0.02, 0.01],
+                                  method="rk4")
     assert [p.evaluations for p in rk4] == [4 * 100, 4 * 200]
     # energy error of a fourth-order method: about 2^4 smaller at half the step
     assert 8 < rk4[0].energy_error / rk4[1].energy_error < 32
-    dop = analysis.dop853_work_precision(dp, [1.0, 1.5], [0.0, 0.0], 2.0, [1e-5, 1e-10])
+    dop = analysis.dop853_work_precision(dp, [1.0, 1.5], [0.0, 0.0], t_end=2.0,
+                                          rtols=[1e-5, 1e-10])
     assert dop[1].energy_error < 1e-3 * dop[0].energy_error
     assert dop[1].evaluations > dop[0].evaluations
     with pytest.raises(ValueError, match="`rtol` must be in"):
-        analysis.dop853_run(dp, [1.0, 1.5], [0.0, 0.0], 1.0, rtol=1.0)
+        analysis.dop853_run(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, rtol=1.0)
 
 
 def test_markdown_table_rejects_a_column_the_rows_lack():
-    rows = analysis.work_precision(pl.simple_pendulum(), "rk4", [1.0], [0.0], 0.2, [0.1])
-    text = analysis.markdown_table(rows, [("dt", "setting", "{:g}")])
+    rows = analysis.work_precision(pl.simple_pendulum(), [1.0], [0.0], t_end=0.2, dts=[0.1],
+                                   method="rk4")
+    text = tables.markdown_table(rows, [("dt", "setting", "{:g}")])
     assert text.splitlines()[2] == "| 0.1 |"
     with pytest.raises(ValueError, match="no attribute 'pendulum'"):
-        analysis.markdown_table(rows)
+        tables.markdown_table(rows)
 
 
 # ---------------------------------------------------------------- the study's figures
 def test_plot_order_shows_the_points_and_each_fitted_slope():
     result = analysis.observed_order(
-        pl.simple_pendulum(), "rk4", [1.0], [0.0], 1.0, analysis.ORDER_DTS
+        pl.simple_pendulum(), [1.0], [0.0], t_end=1.0, dts=analysis.ORDER_DTS, method="rk4"
     )
-    ax = report.plot_order(result).axes[0]
+    ax = plotting.plot_order(result).axes[0]
     assert [t.get_text() for t in ax.get_legend().get_texts()] == [f"rk4: slope {result.slope:.2f}"]
     points, fit = ax.lines
     assert np.array_equal(points.get_xdata(), result.dts)
@@ -258,8 +288,8 @@ def test_plot_energy_error_growth_draws_the_running_maximum():
         pl.simulate(dp, [2.0, 2.5], [0.0, 0.0], t_end=2.0, dt=0.01, method=name)
         for name in ("leapfrog", "leapfrog_velocity")
     ]
-    runs.append(analysis.dop853_run(dp, [2.0, 2.5], [0.0, 0.0], 2.0, rtol=1e-6))
-    ax = report.plot_energy_error_growth(runs).axes[0]
+    runs.append(analysis.dop853_run(dp, [2.0, 2.5], [0.0, 0.0], t_end=2.0, rtol=1e-6))
+    ax = plotting.plot_energy_error_growth(runs).axes[0]
     assert [line.get_linestyle() for line in ax.lines] == ["-", "--", ":"]
     for line, run in zip(ax.lines, runs):
         expected = np.maximum.accumulate(np.abs(run.energy_error[1:]))
@@ -269,18 +299,20 @@ def test_plot_energy_error_growth_draws_the_running_maximum():
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert labels == ["leapfrog", "leapfrog_velocity", "DOP853, rtol = 1e-06"]
     with pytest.raises(ValueError, match="one entry per run"):
-        report.plot_energy_error_growth(runs, labels=["only one"])
+        plotting.plot_energy_error_growth(runs, labels=["only one"])
 
 
 def test_plot_work_precision_one_line_per_method():
     sp = pl.simple_pendulum()
-    points = analysis.work_precision(sp, "rk4", [1.0], [0.0], 1.0, [0.1, 0.05], repeats=2)
-    points += analysis.work_precision(sp, "leapfrog", [1.0], [0.0], 1.0, [0.1, 0.05])
-    ax = report.plot_work_precision(points, x="evaluations").axes[0]
+    points = analysis.work_precision(sp, [1.0], [0.0], t_end=1.0, dts=[0.1, 0.05], method="rk4",
+                                     repeats=2)
+    points += analysis.work_precision(sp, [1.0], [0.0], t_end=1.0, dts=[0.1, 0.05],
+                                      method="leapfrog")
+    ax = plotting.plot_work_precision(points, x="evaluations").axes[0]
     assert [line.get_label() for line in ax.lines] == ["rk4", "leapfrog"]
     assert list(ax.lines[0].get_xdata()) == [40, 80]
     assert list(ax.lines[1].get_ydata()) == [p.energy_error for p in points[2:]]
     with pytest.raises(ValueError, match="`x` must be 'wall_time' or 'evaluations'"):
-        report.plot_work_precision(points, x="steps")
+        plotting.plot_work_precision(points, x="steps")
     with pytest.raises(ValueError, match="`repeats` must be an integer >= 1"):
-        analysis.work_precision(sp, "rk4", [1.0], [0.0], 1.0, [0.1], repeats=0)
+        analysis.work_precision(sp, [1.0], [0.0], t_end=1.0, dts=[0.1], method="rk4", repeats=0)

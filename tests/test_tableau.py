@@ -137,11 +137,12 @@ def test_a_new_tableau_method_is_one_line():
     method = Method.from_tableau("three_eighths", THREE_EIGHTHS, "Kutta's 3/8 rule")
     assert (method.order, method.implicit, method.symplectic) == (4, False, False)
     sp = pl.simple_pendulum()
-    result = analysis.observed_order(sp, method, [1.2], [0.0], 1.0, (0.01, 0.005, 0.0025, 0.00125))
+    dts = (0.01, 0.005, 0.0025, 0.00125)
+    result = analysis.observed_order(sp, [1.2], [0.0], t_end=1.0, dts=dts, method=method)
     assert abs(result.slope - 4) <= 0.15, result
     run = pl.simulate(sp, [1.2], [0.0], t_end=1.0, dt=0.01, method=method)
     assert run.evaluations == 400
     # negative control: Heun's third-order tableau gives a slope of 3
     heun = Method.from_tableau("heun3", HEUN3, "Heun's third-order method")
-    result = analysis.observed_order(sp, heun, [1.2], [0.0], 1.0, (0.01, 0.005, 0.0025, 0.00125))
+    result = analysis.observed_order(sp, [1.2], [0.0], t_end=1.0, dts=dts, method=heun)
     assert abs(result.slope - 3) <= 0.15, result

@@ -221,7 +221,8 @@ def test_equilibrium_explorer_shows_linear_and_nonlinear_side_by_side():
     ex = widgets.explore_equilibrium(pl.simple_pendulum(), "down", offset=[0.01], t_end=3.0)
     linear_ax, nonlinear_ax = ex.figure.axes
     lin, _ = analysis.linearized_solution(
-        ex.model, "down", ex.trajectory.theta[0], ex.trajectory.omega[0], ex.trajectory.t
+        ex.model, ex.trajectory.theta[0], ex.trajectory.omega[0], t=ex.trajectory.t,
+        equilibrium="down",
     )
     np.testing.assert_allclose(linear_ax.lines[0].get_ydata(), lin[:, 0])
     np.testing.assert_allclose(nonlinear_ax.lines[0].get_ydata(), ex.trajectory.theta[:, 0])
@@ -230,7 +231,8 @@ def test_equilibrium_explorer_shows_linear_and_nonlinear_side_by_side():
     # ... a large one near the bottom does not (the period grows with amplitude).
     ex.controls["theta"].value = 0.5
     lin, _ = analysis.linearized_solution(
-        ex.model, "down", ex.trajectory.theta[0], ex.trajectory.omega[0], ex.trajectory.t
+        ex.model, ex.trajectory.theta[0], ex.trajectory.omega[0], t=ex.trajectory.t,
+        equilibrium="down",
     )
     assert np.max(np.abs(lin[:, 0] - ex.trajectory.theta[:, 0])) > 1e-2
 

@@ -3,28 +3,31 @@
 Layers, each using only the ones before it:
 
 ``mechanics`` (SymPy derivation) -> ``model`` (numeric, lambdified) ->
-``integrators`` (one-step maps of Hamiltonian vector fields) -> ``simulate``.
+``integrators`` (one-step maps of Hamiltonian vector fields) -> ``simulate``
+(and ``segments``, the same runs handed out piece by piece) -> ``events``,
+``analysis``, ``chaos``, ``plotting``, ``widgets``, ``animation``, ``report``.
 
 Quick start
 -----------
 >>> import pendulum_lab as pl
 >>> dp = pl.double_pendulum()
 >>> traj = pl.simulate(dp, [2.0, 2.5], [0.0, 0.0], t_end=1.0, dt=0.01, method="glrk4")
->>> bool(abs(traj.energy[-1] - traj.energy[0]) < 1e-6)
+>>> bool(abs(traj.energy[-1] - traj.energy[0]) < 1e-5)
 True
 """
 
 from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
-from .simulate import Trajectory, hamiltonian_field, simulate, step
+from .segments import SegmentedRun, simulate_segments
+from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
 
 __version__ = "0.1.0"
 
 # Submodules that pull in heavy dependencies (ipywidgets, matplotlib) load on
 # first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
-_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "mechanics", "plotting",
-                    "report", "widgets"}
+_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "events", "mechanics",
+                    "plotting", "report", "source", "tables", "timing", "widgets"}
 
 
 def __getattr__(name):
@@ -41,6 +44,7 @@ __all__ = [
     "ConvergenceError",
     "Method",
     "PendulumModel",
+    "SegmentedRun",
     "Trajectory",
     "derive_chain",
     "double_pendulum",
@@ -50,5 +54,7 @@ __all__ = [
     "n_pendulum",
     "simple_pendulum",
     "simulate",
+    "simulate_segments",
     "step",
+    "step_count",
 ]

@@ -1,8 +1,15 @@
-"""Checks of user input at the public boundary; each error names the argument."""
+"""Checks of user input at the public boundary; each error names the argument.
+
+Every public function of the package validates its arguments with these
+helpers, so that a wrong value gives a ``TypeError`` or ``ValueError`` that
+says which argument was wrong and what is accepted, before any work starts.
+"""
 
 from __future__ import annotations
 
 import numbers
+import os
+from pathlib import Path
 
 import numpy as np
 
@@ -21,7 +28,26 @@ def positive_number(name: str, value) -> float:
     """``value`` as a finite float > 0."""
     value = real_number(name, value)
     if value <= 0:
-        raise ValueError(f"`{name}` must be positive (> 0), got {value}")
+        raise ValueError(f"`{name}` must be a positive number (> 0), got {value}")
+    return value
+
+
+def non_negative_number(name: str, value) -> float:
+    """``value`` as a finite float >= 0."""
+    value = real_number(name, value)
+    if value < 0:
+        raise ValueError(f"`{name}` must be a number >= 0, got {value}")
+    return value
+
+
+def number_in(name: str, value, low: float, high: float, unit: str = "",
+              open_low: bool = False) -> float:
+    """``value`` as a float in ``[low, high]`` (``(low, high]`` with ``open_low``)."""
+    value = real_number(name, value)
+    if value > high or value < low or (open_low and value == low):
+        bracket = "(" if open_low else "["
+        unit = f" {unit}" if unit else ""
+        raise ValueError(f"`{name}` must be in {bracket}{low:.6g}, {high:.6g}]{unit}, got {value}")
     return value
 
 
@@ -31,6 +57,37 @@ def integer_at_least(name: str, value, minimum: int) -> int:
     if value < minimum:
         raise ValueError(f"`{name}` must be an integer >= {minimum}, got {value}")
     return int(value)
+
+
+def index_below(name: str, value, size: int) -> int:
+    """An integer in ``[0, size - 1]`` (a 0-based link number)."""
+    value = integer_at_least(name, value, 0)
+    if value >= size:
+        raise ValueError(f"`{name}` must be in [0, {size - 1}], got {value}")
+    return value
+
+
+def choice(name: str, value, allowed):
+    """``value`` itself if it is one of ``allowed``."""
+    allowed = list(allowed)
+    if isinstance(value, bool) or value not in allowed:
+        options = (" or ".join(map(repr, allowed)) if len(allowed) == 2
+                   else f"one of {allowed}")
+        raise ValueError(f"`{name}` must be {options}, got {value!r}")
+    return value
+
+
+def choices(name: str, values, allowed) -> tuple:
+    """A non-empty selection from ``allowed`` (a string counts as one item), repeats dropped."""
+    if isinstance(values, str):
+        values = [values]
+    values = tuple(dict.fromkeys(values))  # drop repeats, keep order
+    if not values:
+        raise ValueError(f"`{name}` must name at least one of {list(allowed)}")
+    for value in values:
+        if value not in allowed:
+            raise ValueError(f"`{name}` must be among {list(allowed)}, got {value!r}")
+    return values
 
 
 def _entries(name: str, values, n: int, kind: str) -> list:
@@ -66,6 +123,75 @@ def state_array(name: str, value, n: int) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"All components of `{name}` must be finite.")
     return arr
+
+
+def state_vector(name: str, value, n: int, bound: float | None = None, unit: str = ""):
+    """One state: shape ``(n,)``, finite, and with ``|x| <= bound`` if a bound is given."""
+    arr = state_array(name, value, n)
+    if arr.shape != (n,):
+        raise ValueError(f"`{name}` must be {n} finite number(s) (one state), got shape "
+                         f"{arr.shape}")
+    if bound is not None and np.any(np.abs(arr) > bound):
+        unit = f" {unit}" if unit else ""
+        raise ValueError(f"`{name}` entries must lie in [-{bound:g}, {bound:g}]{unit}, got {arr}")
+    return arr
+
+
+def same_shape(name_a: str, a: np.ndarray, name_b: str, b: np.ndarray) -> None:
+    if a.shape != b.shape:
+        raise ValueError(
+            f"`{name_a}` and `{name_b}` must have the same shape, got {a.shape} and {b.shape}"
+        )
+
+
+def pendulum_model(model):
+    """``model`` itself if it is a :class:`~pendulum_lab.PendulumModel`, else a ``TypeError``."""
+    from .model import PendulumModel  # model.py imports this module
+
+    if not isinstance(model, PendulumModel):
+        raise TypeError(
+            "`model` must be a PendulumModel (from simple_pendulum, driven_pendulum, "
+            f"double_pendulum or n_pendulum), got {type(model).__name__}"
+        )
+    return model
+
+
+def output_folder(name: str, value) -> Path:
+    """A folder that exists (created with its parents if missing) and can be written to."""
+    try:
+        path = Path(value)
+    except TypeError:
+        raise TypeError(f"`{name}` must be a path, got {type(value).__name__}") from None
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"`{name}` must be a folder, but {str(path)!r} is a file")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ValueError(
+            f"`{name}` must be a folder that can be created, but {str(path)!r} cannot be "
+            f"({err.strerror or err})"
+        ) from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise ValueError(f"`{name}` must be a folder you can write to, but {str(path)!r} is not")
+    return path
+
+
+def physical_memory() -> int | None:
+    """Bytes of RAM of this machine, or None where the system does not say."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def bytes_text(size: float) -> str:
+    """``"3.2 GB"``: a byte count for a message."""
+    units = ("bytes", "kB", "MB", "GB", "TB", "PB", "EB", "ZB", "YB")
+    for unit in units:
+        if size < 1000 or unit == units[-1]:
+            break
+        size /= 1000
+    return f"{size:.3g} {unit}"
 
 
 def nonnegative_number(name: str, value) -> float:

@@ -40,18 +40,19 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
 
+from . import _validation as check
 from . import plotting
-from .model import PendulumModel, check_model
-from .simulate import Trajectory
-from .widgets import (
-    Instrument,
-    _keys,
-    _parameter_controls,
-    _run_controls,
-    _state_controls,
+from .model import PendulumModel
+from .simulate import Trajectory, step_count
+from .widgets.controls import (
+    control_names,
+    parameter_controls,
+    run_controls,
     simulate_controls,
     start_state,
+    state_controls,
 )
+from .widgets.instrument import Instrument
 
 __all__ = [
     "FPS",
@@ -100,11 +101,10 @@ def frame_indices(traj: Trajectory, fps: float, speed: float) -> np.ndarray:
     >>> frame_indices(traj, fps=10, speed=1.0)
     array([  0,  10,  20,  30,  40,  50,  60,  70,  80,  90, 100])
     """
-    for name, value in (("fps", fps), ("speed", speed)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"`{name}` must be a positive number, got {value!r}")
+    fps = check.positive_number("fps", fps)
+    speed = check.positive_number("speed", speed)
     spacing = traj.t[1] - traj.t[0] if len(traj.t) > 1 else 1.0
-    frames = math.floor(traj.t[-1] * fps / speed * (1 + 1e-12)) + 1
+    frames = step_count(traj.t[-1] - traj.t[0], speed / fps) + 1
     times = np.arange(frames) * (speed / fps)
     return np.minimum(np.rint(times / spacing).astype(int), len(traj.t) - 1)
 
@@ -159,8 +159,7 @@ class PendulumScene:
                 f"`traj` must be one trajectory of this {model.n}-link model, got "
                 f"angles of shape {traj.theta.shape}"
             )
-        if not (isinstance(trail, (int, float)) and trail >= 0):
-            raise ValueError(f"`trail` must be a number of seconds >= 0, got {trail!r}")
+        trail = check.non_negative_number("trail", trail)
         self.model, self.traj = model, traj
         self.x, self.y = model.positions(traj.theta)
         spacing = traj.t[1] - traj.t[0] if len(traj.t) > 1 else 1.0
@@ -299,11 +298,11 @@ class Simulator(Instrument):
         speed: float,
         trail: float,
     ):
-        n, keys = model.n, _keys(model.n)
+        n, keys = model.n, control_names(model.n)
         controls = {
-            **_state_controls(n, theta0, omega0),
-            **_parameter_controls(model),
-            **_run_controls(method, t_end, dt, t_end_range=(1.0, 60.0)),
+            **state_controls(n, theta0, omega0),
+            **parameter_controls(model),
+            **run_controls(method, t_end, dt, t_end_range=(1.0, 60.0)),
         }
         columns = [
             ("Initial state", keys["theta"] + keys["omega"]),
@@ -413,11 +412,12 @@ class Simulator(Instrument):
 
 def simulator(
     model: PendulumModel,
-    method="glrk4",
-    t_end: float = 20.0,
-    dt: float = 0.01,
     theta0=None,
     omega0=None,
+    *,
+    t_end: float = 20.0,
+    dt: float = 0.01,
+    method="glrk4",
     speed: float = 1.0,
     trail: float = TRAIL,
 ) -> Simulator:
@@ -428,14 +428,14 @@ def simulator(
     model : PendulumModel
         A simple, double or longer pendulum; its parameters are the sliders'
         start values.
-    method : str
-        A key of :data:`pendulum_lab.METHODS`.
-    t_end, dt : float
-        Length of the run and step [s]; ``t_end`` in ``[1, 60]``.
     theta0, omega0 : array_like, shape (n,), optional
         Initial angles [rad] in ``[-pi, pi]`` and angular velocities [rad/s]
         in ``[-10, 10]``; by default 1 rad for one link, ``(2.0, 2.5)`` for
         two, at rest.
+    t_end, dt : float
+        Length of the run and step [s]; ``t_end`` in ``[1, 60]``.
+    method : str
+        A key of :data:`pendulum_lab.METHODS`.
     speed : float
         Playback speed, one of :data:`SPEEDS`.
     trail : float
@@ -457,14 +457,11 @@ def simulator(
     >>> sim.time
     1.0
     """
-    model = check_model(model)
+    model = check.pendulum_model(model)
     theta0, omega0 = start_state(model.n, theta0, omega0)
-    if speed not in SPEEDS:
-        raise ValueError(f"`speed` must be one of {SPEEDS}, got {speed!r}")
-    if not (isinstance(trail, (int, float)) and trail >= 0):
-        raise ValueError(f"`trail` must be a number of seconds >= 0, got {trail!r}")
-    if not (isinstance(t_end, (int, float)) and 1.0 <= t_end <= 60.0):
-        raise ValueError(f"`t_end` must be in [1, 60] s, got {t_end!r}")
+    speed = check.choice("speed", speed, SPEEDS)
+    trail = check.non_negative_number("trail", trail)
+    t_end = check.number_in("t_end", t_end, 1.0, 60.0, "s")
     sim = Simulator(model, method, t_end, dt, theta0, omega0, speed, trail)
     if not sim.update():
         raise ValueError(sim.message)
@@ -552,9 +549,8 @@ def html_animation(
 
     if not isinstance(traj, Trajectory):
         raise TypeError(f"`traj` must be a Trajectory, got {type(traj).__name__}")
-    check_model(model)
-    if isinstance(max_frames, bool) or not isinstance(max_frames, int) or max_frames < 1:
-        raise ValueError(f"`max_frames` must be an integer >= 1, got {max_frames!r}")
+    check.pendulum_model(model)
+    max_frames = check.integer_at_least("max_frames", max_frames, 1)
     frames = frame_indices(traj, fps, speed)
     if len(frames) > max_frames:
         raise ValueError(

@@ -279,8 +279,8 @@ def run_warmup(args) -> int:
     """Compile the numerical kernels now instead of on first use."""
     from .simulate import warm_up
 
-    seconds = warm_up(links=args.links)
-    print(f"pendulum_lab kernels ready for chains of {args.links} link(s) ({seconds:.1f} s)")
+    seconds = warm_up(ns=args.n)
+    print(f"pendulum_lab kernels ready for chains of {args.n} link(s) ({seconds:.1f} s)")
     return 0
 
 
@@ -291,8 +291,8 @@ def _add_warmup_command(subparsers) -> None:
         description="Compile, or load from the disk cache, every integrator kernel for the "
         "given chain lengths. Run once after installing to make the first notebook fast.",
     )
-    warm.add_argument("--links", type=int, nargs="+", default=[1, 2], metavar="N",
-                      help="chain lengths to prepare (default: 1 2)")
+    warm.add_argument("--n", type=int, nargs="+", default=[1, 2], metavar="N",
+                      help="chain lengths (numbers of links) to prepare (default: 1 2)")
     warm.set_defaults(handler=run_warmup)
 
 

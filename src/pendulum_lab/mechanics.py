@@ -307,6 +307,19 @@ class Chain:
             result.append(Equilibrium(name, angles, sp.Matrix(jacobian), ratio))
         return result
 
+    def equilibrium(self, name: str) -> Equilibrium:
+        """The equilibrium called ``name`` (``"down"``, ``"up-down"``, ...).
+
+        Examples
+        --------
+        >>> derive_chain(2).equilibrium("down-up").angles
+        (0, pi)
+        """
+        names = [eq.name for eq in self.equilibria]
+        if name not in names:
+            raise ValueError(f"`equilibrium` must be one of {names}, got {name!r}")
+        return self.equilibria[names.index(name)]
+
     def jacobian(self) -> sp.Matrix:
         """Jacobian of ``(omega, M^-1 F)`` with respect to ``(theta, omega)``.
 

@@ -24,14 +24,7 @@ import sympy as sp
 from . import _validation as check
 from .mechanics import Chain, derive_chain
 
-__all__ = [
-    "PendulumModel",
-    "check_model",
-    "double_pendulum",
-    "driven_pendulum",
-    "n_pendulum",
-    "simple_pendulum",
-]
+__all__ = ["PendulumModel", "double_pendulum", "driven_pendulum", "n_pendulum", "simple_pendulum"]
 
 
 def _lambdify(args, exprs, shape):
@@ -352,16 +345,6 @@ class PendulumModel:
                       f"drive_frequency={self.drive_frequency}")
         return (f"PendulumModel(n={self.n}, masses={self.masses}, lengths={self.lengths}, "
                 f"g={self.g}{forces})")
-
-
-def check_model(model) -> PendulumModel:
-    """``model`` itself if it is a :class:`PendulumModel`, else a ``TypeError`` naming it."""
-    if not isinstance(model, PendulumModel):
-        raise TypeError(
-            "`model` must be a PendulumModel (from simple_pendulum, driven_pendulum, "
-            f"double_pendulum or n_pendulum), got {type(model).__name__}"
-        )
-    return model
 
 
 def simple_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> PendulumModel:

@@ -8,11 +8,9 @@ methods and, labelled as such, with the report's velocity-variable versions -
 one overview of the energy errors per pendulum, and ``summary.md`` with a table
 of energy drift, observed order, symplecticity defect and wall time.
 
-The same study is available from Python as :func:`run_report`, and its figures
-as functions the course notebooks use: :func:`plot_order` (error against step,
-with the fitted slopes), :func:`plot_energy_error_growth` (the running maximum
-of the energy error over a long run) and :func:`plot_work_precision` (energy
-error against evaluations or wall time).
+The same study is available from Python as :func:`run_report`. Its figures
+are drawn by :mod:`pendulum_lab.plotting` and its table by
+:mod:`pendulum_lab.tables`; this module holds only the study and its command.
 
 Examples
 --------
@@ -33,14 +31,14 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from . import __version__, analysis, plotting
+from . import _validation as check
 from .integrators import METHODS, ConvergenceError, get_method
 from .model import double_pendulum, simple_pendulum
 from .simulate import Trajectory, simulate
+from .tables import markdown_table
 
 __all__ = [
     "DEFAULT_DT",
@@ -52,9 +50,6 @@ __all__ = [
     "add_report_command",
     "build_parser",
     "main",
-    "plot_energy_error_growth",
-    "plot_order",
-    "plot_work_precision",
     "run_from_args",
     "run_report",
     "settings_from_args",
@@ -128,133 +123,9 @@ def _energy_figure(traj: Trajectory, pendulum: str) -> Figure:
     return fig
 
 
-# --------------------------------------------------------------------------- figures of the study
-def _axes(ax, **figure_kw):
-    if ax is None:
-        return plotting.new_figure(**figure_kw)[1]
-    if not isinstance(ax, Axes):
-        raise TypeError(f"`ax` must be a matplotlib Axes or None, got {type(ax).__name__}")
-    return ax
-
-
-def _run_label(run) -> str:
-    if isinstance(run, analysis.ReferenceRun):
-        return f"DOP853, rtol = {run.rtol:g}"
-    return run.method.name
-
-
-def plot_energy_error_growth(runs, ax: Axes | None = None, labels=None) -> Figure:
-    """The largest energy error so far, ``max_{s <= t} |E(s) - E(0)|``, on a log scale.
-
-    The running maximum is flat once a bounded error has reached its bound
-    and keeps rising for a drifting one; the raw error oscillates too fast to
-    read over a long run. The course report's velocity-variable methods are
-    dashed, DOP853 dotted.
-
-    Parameters
-    ----------
-    runs : sequence of Trajectory or analysis.ReferenceRun
-        Single trajectories.
-    ax : Axes, optional
-    labels : sequence of str, optional
-        Legend entries; by default the method names.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    ax = _axes(ax, width=8.0, height=4.2)
-    labels = [_run_label(run) for run in runs] if labels is None else list(labels)
-    if len(labels) != len(runs):
-        raise ValueError(f"`labels` must have one entry per run ({len(runs)}), got {len(labels)}")
-    for run, label in zip(runs, labels):
-        if np.ndim(run.energy_error) != 1:
-            raise ValueError("`runs` must be single trajectories, got an ensemble")
-        worst = np.maximum.accumulate(np.abs(run.energy_error[1:]))
-        if isinstance(run, analysis.ReferenceRun):
-            style = ":"
-        else:
-            style = "--" if run.method.variables == "velocity" else "-"
-        ax.plot(run.t[1:], np.where(worst > 0, worst, np.nan), style, lw=1.4, label=label)
-    ax.set_yscale("log")
-    ax.set(xlabel="t (s)", ylabel="largest |E(s) - E(0)| for s <= t (J)")
-    ax.legend(fontsize="small", ncols=2)
-    return ax.figure
-
-
-def plot_order(results, ax: Axes | None = None) -> Figure:
-    """Global error against step size (log-log) with each fitted slope.
-
-    Parameters
-    ----------
-    results : OrderResult or sequence of OrderResult
-        From :func:`pendulum_lab.analysis.observed_order`.
-    ax : Axes, optional
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Markers are the measured errors, dashed lines the least-squares fits
-        ``log(error) = slope log(dt) + c``; the legend gives each slope.
-    """
-    if isinstance(results, analysis.OrderResult):
-        results = [results]
-    ax = _axes(ax, width=6.0, height=4.2)
-    for result in results:
-        slope, intercept = np.polyfit(np.log(result.dts), np.log(result.errors), 1)
-        line = ax.loglog(
-            result.dts, result.errors, "o", label=f"{result.method}: slope {slope:.2f}"
-        )[0]
-        ax.loglog(
-            result.dts, np.exp(intercept) * result.dts**slope, "--", lw=1, color=line.get_color()
-        )
-    ax.set(
-        xlabel="step size dt (s)",
-        ylabel="error at the final time",
-        title="Observed order of accuracy",
-    )
-    ax.legend(fontsize="small")
-    return ax.figure
-
-
-def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) -> Figure:
-    """Energy error against cost, one line per method (a work-precision diagram).
-
-    Parameters
-    ----------
-    points : sequence of analysis.WorkPrecision
-    x : {"wall_time", "evaluations"}
-        The cost axis.
-    ax : Axes, optional
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Lower left is better: less error for less work.
-    """
-    if x not in ("wall_time", "evaluations"):
-        raise ValueError(f"`x` must be 'wall_time' or 'evaluations', got {x!r}")
-    ax = _axes(ax, width=6.0, height=4.2)
-    for name in dict.fromkeys(point.method for point in points):
-        mine = [point for point in points if point.method == name and point.completed]
-        style = ":" if name == "DOP853" else "-"
-        ax.loglog(
-            [getattr(point, x) for point in mine],
-            [point.energy_error for point in mine],
-            "o" + style,
-            label=name,
-        )
-    ax.set(
-        xlabel="wall time (s)" if x == "wall_time" else "vector-field evaluations",
-        ylabel="max |E - E(0)| (J)",
-    )
-    ax.legend(fontsize="small")
-    return ax.figure
-
-
 def _error_overview(trajectories: list[Trajectory], pendulum: str) -> Figure:
-    """:func:`plot_energy_error_growth` of every method on one pendulum."""
-    fig = plot_energy_error_growth(trajectories)
+    """:func:`~pendulum_lab.plotting.plot_energy_error_growth` of every method on one pendulum."""
+    fig = plotting.plot_energy_error_growth(trajectories)
     fig.axes[0].set_title(
         f"{pendulum.capitalize()} pendulum: energy error of each method\n"
         "(dashed: the course report's velocity-variable versions)"
@@ -267,30 +138,15 @@ def _save(fig: Figure, path: Path) -> Path:
     return path
 
 
-def _check_choices(name: str, values, allowed) -> tuple[str, ...]:
-    if isinstance(values, str):
-        values = [values]
-    values = tuple(dict.fromkeys(values))  # drop repeats, keep order
-    if not values:
-        raise ValueError(f"`{name}` must name at least one of {list(allowed)}")
-    for value in values:
-        if value not in allowed:
-            raise ValueError(f"`{name}` must be among {list(allowed)}, got {value!r}")
-    return values
-
-
 def _check_times(t_end, dt) -> tuple[float, float]:
-    for name, value in (("t_end", t_end), ("dt", dt)):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise TypeError(f"`{name}` must be a real number, got {type(value).__name__}")
-        if not np.isfinite(value) or value <= 0:
-            raise ValueError(f"`{name}` must be a positive number, got {value}")
+    dt = check.positive_number("dt", dt)
+    t_end = check.positive_number("t_end", t_end)
     if t_end < 10 * dt:
         raise ValueError(
             f"`t_end` must be at least 10 steps of dt = {dt:g} "
             f"(the energy drift compares tenths of the run), got {t_end:g}"
         )
-    return float(t_end), float(dt)
+    return t_end, dt
 
 
 def run_report(
@@ -325,12 +181,9 @@ def run_report(
     ReportResult
     """
     t_end, dt = _check_times(t_end, dt)
-    methods = _check_choices("methods", methods, METHODS)
-    pendulums = _check_choices("pendulums", pendulums, PENDULUMS)
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"`out` must be a folder, but {str(out)!r} is a file")
-    out.mkdir(parents=True, exist_ok=True)
+    methods = check.choices("methods", methods, METHODS)
+    pendulums = check.choices("pendulums", pendulums, PENDULUMS)
+    out = check.output_folder("out", out)
 
     from tqdm.auto import tqdm
 
@@ -345,7 +198,7 @@ def run_report(
             model = factory()
             omega0 = (0.0,) * model.n
             # one DOP853 reference for the order fits of all methods
-            reference = analysis.reference_solution(model, theta0, omega0, 1.0)
+            reference = analysis.reference_solution(model, theta0, omega0, t_end=1.0)
             done = []
             for name in methods:
                 bar.set_description(f"{pendulum} {name}")
@@ -403,7 +256,7 @@ def _summary_text(rows, failures, figures, out: Path, t_end, dt, elapsed) -> str
         "the accuracy of the finite differences); *reversibility error* is the distance "
         "after one step forward and one back; *wall time* is the stepping time of the run.",
         "",
-        analysis.markdown_table(rows).rstrip(),
+        markdown_table(rows).rstrip(),
         "",
     ]
     if any(not r.completed for r in rows):
@@ -429,12 +282,9 @@ DESCRIPTION = (
 
 def _positive_float(text: str) -> float:
     try:
-        value = float(text)
+        return check.positive_number("value", float(text))
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}") from None
-    if not np.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -520,6 +370,8 @@ def run_from_args(args: argparse.Namespace) -> int:
         result = run_report(**settings_from_args(args))
     except ValueError as err:
         args.report_parser.error(str(err))  # exits with status 2
+    except OSError as err:  # the folder was writable, a file in it was not
+        args.report_parser.error(f"could not write the report into {str(args.out)!r}: {err}")
     print(f"wrote {len(result.figures)} figures and {result.summary} in {result.elapsed:.1f} s")
     for pendulum, method, message in result.failures:
         print(f"warning: {pendulum} / {method} failed: {message}", file=sys.stderr)

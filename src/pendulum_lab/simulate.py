@@ -1,4 +1,14 @@
-"""The driver: a model, a method and a time grid make a :class:`Trajectory`."""
+"""The driver: a model, a method and a time grid make a :class:`Trajectory`.
+
+Every function of the package that runs a simulation follows one calling
+convention, the one of :func:`simulate`::
+
+    f(model, theta0, omega0=None, *, t_end, dt, method=..., save_every=..., p0=None)
+
+the initial state first (angles, then angular velocities or, with ``p0``,
+canonical momenta), everything else by keyword. :func:`step_count` is the one
+rule that turns ``t_end`` and ``dt`` into a number of steps.
+"""
 
 from __future__ import annotations
 
@@ -32,9 +42,19 @@ from .integrators import (
     suitable_methods,
     unsuitability,
 )
-from .model import PendulumModel, check_model, driven_pendulum, n_pendulum
+from .model import PendulumModel, driven_pendulum, n_pendulum
 
-__all__ = ["Trajectory", "hamiltonian_field", "simulate", "step", "warm_up"]
+__all__ = [
+    "Trajectory",
+    "canonical_state",
+    "hamiltonian_field",
+    "progress_bar",
+    "simulate",
+    "step",
+    "step_count",
+    "velocity_state",
+    "warm_up",
+]
 
 # Show a progress bar by default once a run does this many state updates
 # (steps times ensemble size): a few seconds of work or more.
@@ -43,6 +63,12 @@ PROGRESS_THRESHOLD = 2_000_000
 CHUNK_WORK = 200_000
 # Ensembles at least this large are split across threads.
 PARALLEL_MIN_MEMBERS = 64
+# The compiled loop counts steps in int64; stay well clear of its end.
+MAX_STEPS = 2**62
+# Floats a run holds per kept state: per member and link (theta and the saved
+# momenta while stepping; theta, omega, p afterwards), and per member (the
+# three energies). A lower bound of what a run needs.
+FLOATS_PER_STATE = (5, 3)
 
 
 @dataclass(frozen=True)
@@ -52,7 +78,7 @@ class Trajectory:
     Attributes
     ----------
     t : ndarray, shape (N+1,)
-        Times, from the start time ``t0``.
+        Times [s], from the run's start time ``t0`` (0 by default).
     theta, omega, p : ndarray, shape (N+1, ..., n)
         Angles, angular velocities and canonical momenta (``...`` is the
         ensemble shape of the initial state, empty for one trajectory).
@@ -161,14 +187,131 @@ def _pool(workers: int) -> ThreadPoolExecutor:
     return ThreadPoolExecutor(workers, thread_name_prefix="pendulum_lab")
 
 
-def step(model: PendulumModel, method, q0, p0, dt: float, *, t0: float = 0.0
-         ) -> tuple[np.ndarray, np.ndarray]:
-    """One step of ``method`` in canonical variables ``(theta, p)``, from time ``t0``.
+def step_count(t_end: float, dt: float) -> int:
+    """The number of steps of size ``dt`` in ``[0, t_end]``: ``floor(t_end / dt)``.
 
-    ``q0`` and ``p0`` have shape ``(n,)`` or ``(..., n)``. The velocity-variable
-    methods are converted ``p -> omega`` before and back after their step, so
-    all methods can be compared as maps of ``(theta, p)``. A negative ``dt``
-    steps backwards. ``t0`` matters for a driven model only.
+    A relative slack of ``1e-12`` forgives the rounding of a quotient that
+    should be whole (``0.3 / 0.1`` is ``2.9999999999999996``). This is the
+    one rule every run of the package uses.
+
+    Examples
+    --------
+    >>> step_count(0.3, 0.1), step_count(1.0, 0.3)
+    (3, 3)
+    """
+    return int(np.floor(t_end / dt * (1 + 1e-12)))
+
+
+def time_grid(t_end, dt) -> tuple[float, float, int]:
+    """Validated ``(t_end, dt, number of steps)`` of a run; ``t_end >= dt > 0``."""
+    dt = check.positive_number("dt", dt)
+    t_end = check.positive_number("t_end", t_end)
+    if t_end < dt:
+        raise ValueError(f"`t_end` must be at least `dt` ({dt}), got {t_end}")
+    n_steps = step_count(t_end, dt)
+    if n_steps > MAX_STEPS:
+        raise ValueError(
+            f"`t_end` / `dt` = {t_end:g} / {dt:g} = {n_steps:.3g} steps, more than a run can "
+            f"count ({MAX_STEPS:.3g}); choose a larger `dt` or a shorter `t_end`"
+        )
+    return t_end, dt, n_steps
+
+
+def _initial_state(model: PendulumModel, theta0, omega0, p0) -> tuple[np.ndarray, np.ndarray]:
+    """Validated ``theta0`` and the one of ``omega0`` and ``p0`` that was given."""
+    theta0 = check.state_array("theta0", theta0, model.n)
+    if (omega0 is None) == (p0 is None):
+        raise TypeError("give exactly one of `omega0` (angular velocities) and `p0` (momenta)")
+    name, start = ("omega0", omega0) if p0 is None else ("p0", p0)
+    start = check.state_array(name, start, model.n)
+    check.same_shape("theta0", theta0, name, start)
+    return theta0, start
+
+
+def run_arguments(model, theta0, omega0, p0, t_end, dt, method, save_every, t0):
+    """The arguments of a run, validated in the order :func:`simulate` names them.
+
+    Returns
+    -------
+    method : Method
+    theta0, start : ndarray
+        The initial angles and the one of ``omega0``, ``p0`` that was given.
+    (t_end, dt, n_steps) : tuple
+    save_every : int
+    t0 : float
+    """
+    check.pendulum_model(model)
+    method = get_method(method)
+    theta0, start = _initial_state(model, theta0, omega0, p0)
+    grid = time_grid(t_end, dt)
+    save_every = check.integer_at_least("save_every", save_every, 1)
+    return method, theta0, start, grid, save_every, check.real_number("t0", t0)
+
+
+def canonical_state(model: PendulumModel, theta0, omega0=None, p0=None):
+    """The initial state ``(theta0, p0)`` in canonical variables, validated.
+
+    Give exactly one of ``omega0`` (converted by ``p = M(theta) omega``) and
+    ``p0`` (taken as it is).
+
+    Returns
+    -------
+    theta0, p0 : ndarray, shape (..., n)
+    """
+    check.pendulum_model(model)
+    theta0, start = _initial_state(model, theta0, omega0, p0)
+    return theta0, (start if p0 is not None else model.momenta(theta0, start))
+
+
+def velocity_state(model: PendulumModel, theta0, omega0=None, p0=None, *,
+                   single: bool = False):
+    """The initial state ``(theta0, omega0)`` in velocity variables, validated.
+
+    Give exactly one of ``omega0`` (taken as it is) and ``p0`` (converted by
+    ``omega = M(theta)^-1 p``). With ``single``, it must be one state of shape
+    ``(n,)``.
+
+    Returns
+    -------
+    theta0, omega0 : ndarray, shape (..., n)
+    """
+    check.pendulum_model(model)
+    theta0, start = _initial_state(model, theta0, omega0, p0)
+    if single and theta0.ndim != 1:
+        raise ValueError("`theta0` and `omega0` must have shape (n,) (one trajectory)")
+    return theta0, (start if p0 is None else model.velocities(theta0, start))
+
+
+def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4", p0=None,
+         t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """One step of ``method`` from ``(theta0, omega0)`` or ``(theta0, p0)``.
+
+    The result is always in canonical variables ``(theta1, p1)``, whatever
+    the method steps internally: the velocity-variable methods are converted
+    ``p -> omega`` before and back after their step, so all methods can be
+    compared as maps of ``(theta, p)``. A negative ``dt`` steps backwards.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0 : array_like, shape (n,) or (..., n)
+        Angles [rad].
+    omega0 : array_like, shape like ``theta0``, optional
+        Angular velocities [rad/s]; or give ``p0``.
+    dt : float
+        Step size [s], non-zero.
+    method : str or Method
+        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``.
+    p0 : array_like, shape like ``theta0``, optional
+        Canonical momenta instead of ``omega0`` (give exactly one).
+    t0 : float
+        Time at the start of the step [s] (the drive of a driven model
+        depends on it).
+
+    Returns
+    -------
+    theta1, p1 : ndarray, shape like ``theta0``
+        Angles and canonical momenta after the step.
 
     Raises
     ------
@@ -178,28 +321,24 @@ def step(model: PendulumModel, method, q0, p0, dt: float, *, t0: float = 0.0
     Examples
     --------
     >>> import pendulum_lab as pl
-    >>> q1, p1 = pl.step(pl.simple_pendulum(), "leapfrog", [0.1], [0.0], 0.01)
-    >>> q1.shape
+    >>> theta1, p1 = pl.step(pl.simple_pendulum(), [0.1], p0=[0.0], dt=0.01, method="leapfrog")
+    >>> theta1.shape
     (1,)
     """
-    check_model(model)
+    check.pendulum_model(model)
     method = get_method(method)
-    q0 = check.state_array("q0", q0, model.n)
-    p0 = check.state_array("p0", p0, model.n)
-    if q0.shape != p0.shape:
-        raise ValueError(f"`q0` and `p0` must have the same shape, got {q0.shape} and {p0.shape}")
+    theta0, start = _initial_state(model, theta0, omega0, p0)
     dt = check.real_number("dt", dt)
     if dt == 0:
         raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
     t0 = check.real_number("t0", t0)
     field = hamiltonian_field(model)
     _check_method_fits(model, method, field)
-    shape = q0.shape
+    shape = theta0.shape
     # Copies: the compiled loop updates its arguments in place.
-    q = q0.reshape(-1, model.n).copy()
-    y = p0.reshape(-1, model.n).copy()
-    if method.variables == "velocity":
-        y = np.ascontiguousarray(model.velocities(q, y))
+    q = theta0.reshape(-1, model.n).copy()
+    y = start.reshape(-1, model.n)
+    y = to_method_variables(model, method, q, y, given_momenta=p0 is not None)
     unused = np.empty((q.shape[0], 1, model.n))
     stats = np.zeros((q.shape[0], 4), dtype=np.int64)
     _advance(method, field, q, y, dt, 1, 0, 2, unused, unused, stats, t0=t0)
@@ -211,7 +350,22 @@ def step(model: PendulumModel, method, q0, p0, dt: float, *, t0: float = 0.0
     return q.reshape(shape), y.reshape(shape)
 
 
-def _progress_bar(total: int, enabled: bool | None, work: int, label: str):
+def to_method_variables(model, method, q, y, given_momenta: bool) -> np.ndarray:
+    """``y`` (momenta or velocities, rows like ``q``) as a new C array in the method's variables."""
+    canonical = method.variables == "canonical"
+    if canonical and not given_momenta:
+        y = model.momenta(q, y)
+    elif not canonical and given_momenta:
+        y = model.velocities(q, y)
+    return np.array(y, order="C")
+
+
+def progress_bar(total: int, work: int, enabled: bool | None, label: str):
+    """A tqdm bar over ``total`` steps, or None.
+
+    ``enabled=None`` shows one only for work of a few seconds or more
+    (``work`` = state updates, steps times ensemble members).
+    """
     if enabled is None:
         enabled = work >= PROGRESS_THRESHOLD
     if not enabled:
@@ -221,20 +375,39 @@ def _progress_bar(total: int, enabled: bool | None, work: int, label: str):
     return tqdm(total=total, desc=label, unit="step", mininterval=0.5)
 
 
+def _check_memory(n_saved: int, members: int, n: int, t_end: float, dt: float, n_steps: int,
+                  save_every: int) -> None:
+    """Refuse a run whose kept states cannot fit in this machine's memory."""
+    per_state = FLOATS_PER_STATE[0] * n + FLOATS_PER_STATE[1]
+    needed = 8.0 * n_saved * members * per_state
+    available = check.physical_memory()
+    if available is None or needed <= available:
+        return
+    runs = "1 trajectory" if members == 1 else f"{members} trajectories"
+    raise ValueError(
+        f"`t_end` = {t_end:g} s with `dt` = {dt:g} s is {n_steps:.3g} steps; with "
+        f"`save_every` = {save_every}, keeping {n_saved:.3g} states of {runs} needs at least "
+        f"{check.bytes_text(needed)} of memory, more than this machine's "
+        f"{check.bytes_text(available)}. Raise `save_every`, pass keep='final' (the final "
+        "state only), or choose a shorter `t_end` or a larger `dt`."
+    )
+
+
 def simulate(
     model: PendulumModel,
     theta0,
     omega0=None,
+    *,
     t_end: float = 20.0,
     dt: float = 0.01,
     method="glrk4",
-    *,
-    p0=None,
     save_every: int = 1,
-    progress: bool | None = None,
+    p0=None,
     t0: float = 0.0,
+    keep: str = "all",
+    progress: bool | None = None,
 ) -> Trajectory:
-    """Integrate the pendulum from ``(theta0, omega0)`` at time ``t0`` to ``t_end``.
+    """Integrate the pendulum from ``(theta0, omega0)`` over ``[t0, t0 + t_end]``.
 
     Parameters
     ----------
@@ -243,24 +416,27 @@ def simulate(
         Initial angles [rad] and angular velocities [rad/s]. Leading axes
         make an ensemble, integrated together.
     t_end : float
-        Final time, ``t_end >= t0 + dt``; the run takes ``floor((t_end - t0) / dt)``
-        steps.
+        Length of the run [s], ``t_end >= dt``; the run takes
+        :func:`step_count` ``(t_end, dt) = floor(t_end / dt)`` steps.
     dt : float
-        Step size, ``> 0``.
+        Step size [s], ``> 0``.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS` (or of ``CONFORMAL_METHODS``).
-        On a damped model the methods that assume a Hamiltonian
+        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``. On a
+        damped model the methods that assume a Hamiltonian
         (``semi_implicit_euler``, ``leapfrog``) raise a ``ValueError``.
+    save_every : int
+        Keep every ``save_every``-th state (memory for long runs and ensembles).
     p0 : array_like, shape like ``theta0``, optional
         Initial canonical momenta, instead of ``omega0`` (give exactly one):
         restarting from a saved ``(theta, p)`` then involves no conversion.
-    save_every : int
-        Keep every ``save_every``-th state (memory for long runs and ensembles).
+    t0 : float
+        Time of the initial state [s]; ``Trajectory.t`` starts there (the
+        drive of a driven model depends on it).
+    keep : {"all", "final"}
+        ``"all"``: every ``save_every``-th state; ``"final"``: the initial and
+        the final state only (an ensemble's end points, in little memory).
     progress : bool, optional
         Show a progress bar; by default only for long runs.
-    t0 : float
-        Start time: the time of ``theta0``, ``omega0`` (the drive of a driven
-        model depends on it).
 
     Returns
     -------
@@ -271,6 +447,10 @@ def simulate(
     ConvergenceError
         If an implicit method's equations do not converge; the message names
         the step and the time.
+    ValueError
+        For invalid arguments, including a run whose kept states would not fit
+        in memory (the message names ``t_end``, ``dt``, ``save_every`` and the
+        memory needed).
 
     Notes
     -----
@@ -278,7 +458,9 @@ def simulate(
     trajectory then stops at the first non-finite state with a
     ``RuntimeWarning`` and returns what it computed, with ``completed=False``;
     in an ensemble the other members go on and the blown-up one holds NaN.
-    Ensemble members are integrated in parallel threads.
+    Ensemble members are integrated in parallel threads. For runs processed
+    piece by piece (every step needed, too many to keep), see
+    :func:`pendulum_lab.simulate_segments`.
 
     Examples
     --------
@@ -287,40 +469,25 @@ def simulate(
     >>> traj.theta.shape
     (11, 1)
     """
-    check_model(model)
-    method = get_method(method)
-    theta0 = check.state_array("theta0", theta0, model.n)
-    if (omega0 is None) == (p0 is None):
-        raise TypeError("give exactly one of `omega0` (angular velocities) and `p0` (momenta)")
-    name, start = ("omega0", omega0) if p0 is None else ("p0", p0)
-    start = check.state_array(name, start, model.n)
-    if theta0.shape != start.shape:
-        raise ValueError(
-            f"`theta0` and `{name}` must have the same shape, got {theta0.shape} and {start.shape}"
-        )
-    dt = check.positive_number("dt", dt)
-    t0 = check.real_number("t0", t0)
-    t_end = check.real_number("t_end", t_end)
-    if t_end - t0 < dt:
-        after = f" after `t0` ({t0:g})" if t0 else ""
-        raise ValueError(f"`t_end` must be at least `dt` ({dt}){after}, got {t_end}")
-    save_every = check.integer_at_least("save_every", save_every, 1)
+    method, theta0, start, (t_end, dt, n_steps), save_every, t0 = run_arguments(
+        model, theta0, omega0, p0, t_end, dt, method, save_every, t0
+    )
+    if check.choice("keep", keep, ("all", "final")) == "final":
+        if save_every != 1:
+            raise ValueError("give `save_every` only with keep='all' (keep='final' keeps the "
+                             "initial and the final state)")
+        save_every = n_steps
     field = hamiltonian_field(model)
     _check_method_fits(model, method, field)
 
-    n_steps = int(np.floor((t_end - t0) / dt * (1 + 1e-12)))
     n_saved = n_steps // save_every + 1
-    canonical = method.variables == "canonical"
     batch_shape = theta0.shape[:-1]
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    y = start.reshape(-1, model.n)
-    if canonical and p0 is None:
-        y = model.momenta(q, y)
-    elif not canonical and p0 is not None:
-        y = model.velocities(q, y)
-    y = np.array(y, order="C")
+    y = to_method_variables(model, method, q, start.reshape(-1, model.n),
+                             given_momenta=p0 is not None)
     members = q.shape[0]
+    _check_memory(n_saved, members, model.n, t_end, dt, n_steps, save_every)
     saved_q = np.full((members, n_saved, model.n), np.nan)
     saved_y = np.full((members, n_saved, model.n), np.nan)
     saved_q[:, 0], saved_y[:, 0] = q, y
@@ -328,7 +495,7 @@ def simulate(
 
     # The compiled loop runs in chunks only so that a progress bar can move.
     chunk = max(1, min(n_steps, CHUNK_WORK // members))
-    bar = _progress_bar(n_steps, progress, n_steps * members, method.name)
+    bar = progress_bar(n_steps, n_steps * members, progress, method.name)
     start = time.perf_counter()
     try:
         for first in range(0, n_steps, chunk):
@@ -351,8 +518,8 @@ def simulate(
         member = f", ensemble member {np.unravel_index(k, batch_shape)}" if batch_shape else ""
         raise ConvergenceError(
             f"{method.name}: the implicit equations did not converge within {MAX_SWEEPS} "
-            f"iterations at step {at} (t = {t0 + at * dt:.6g}, dt = {dt:g}{member}); use a "
-            "smaller dt"
+            f"iterations at step {at} (t = {t0 + at * dt:.6g}, dt = {dt:g}{member}); "
+            "use a smaller dt"
         )
     blown = stats[:, STATUS] == NOT_FINITE
     completed = not np.any(blown)
@@ -374,7 +541,7 @@ def simulate(
     out_shape = (kept, *batch_shape, model.n)
     theta = np.ascontiguousarray(saved_q[:, :kept].swapaxes(0, 1)).reshape(out_shape)
     saved = np.ascontiguousarray(saved_y[:, :kept].swapaxes(0, 1)).reshape(out_shape)
-    if canonical:
+    if method.variables == "canonical":
         p, omega = saved, model.velocities(theta, saved)
     else:
         omega, p = saved, model.momenta(theta, saved)
@@ -398,7 +565,7 @@ def simulate(
     )
 
 
-def warm_up(links=(1, 2), methods=None, progress: bool = True) -> float:
+def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
     """Compile now, or load from the disk cache, the kernels a course session uses.
 
     Numba compiles each kernel the first time it runs on a machine (a few
@@ -408,9 +575,9 @@ def warm_up(links=(1, 2), methods=None, progress: bool = True) -> float:
 
     Parameters
     ----------
-    links : sequence of int
-        Chain lengths to prepare (1: simple pendulum, 2: double pendulum, ...);
-        with 1, the driven pendulum's kernels too.
+    ns : sequence of int
+        Chain lengths (numbers of links) to prepare: 1 the simple pendulum
+        (and the driven pendulum's kernels), 2 the double pendulum, ...
     methods : sequence of str, optional
         Method names; all of :data:`pendulum_lab.METHODS` and
         ``CONFORMAL_METHODS`` by default.
@@ -424,15 +591,15 @@ def warm_up(links=(1, 2), methods=None, progress: bool = True) -> float:
     """
     everything = [*METHODS, *CONFORMAL_METHODS]
     names = [get_method(m).name for m in (everything if methods is None else methods)]
-    links = [check.integer_at_least("links", n, 1) for n in links]
+    ns = [check.integer_at_least("ns", n, 1) for n in ns]
     start = time.perf_counter()
-    jobs = [(n, name) for n in links for name in names]
+    jobs = [(n, name) for n in ns for name in names]
     if progress:
         from tqdm.auto import tqdm
 
         jobs = tqdm(jobs, desc="compiling kernels", unit="kernel")
     for n, name in jobs:
         simulate(n_pendulum(n), np.full(n, 0.1), np.zeros(n), t_end=0.01, dt=0.01, method=name)
-    if 1 in links:  # the step kernels take any field: one run compiles the forced field
+    if 1 in ns:  # the step kernels take any field: one run compiles the forced field
         simulate(driven_pendulum(), [0.1], [0.0], t_end=0.01, dt=0.01, method=names[0])
     return time.perf_counter() - start

@@ -1,14 +1,7 @@
-"""Figures of trajectories and models (matplotlib, no pyplot state).
-
-Every ``plot_*`` function draws into ``ax`` when given one and otherwise
-makes a new :class:`matplotlib.figure.Figure`; it returns the Figure, so a
-notebook cell ending with the call shows it (with ``%matplotlib inline``),
-and a test can inspect the artists under any backend. Figures are created
-without :mod:`matplotlib.pyplot`, so nothing accumulates in a global figure
-list.
+"""Figures of trajectories and models: energies, angles, phase space, the chain itself.
 
 Angles in phase plots are wrapped into ``(-pi, pi]`` and lines are broken
-where a rotating arm jumps from ``pi`` to ``-pi``.
+where a rotating link jumps from ``pi`` to ``-pi``.
 
 :data:`PANELS` names the single-axes drawings the explorers in
 :mod:`pendulum_lab.widgets` can show; each is a callable
@@ -23,85 +16,39 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from . import analysis
-from .model import PendulumModel
-from .simulate import Trajectory
+from .. import _validation as check
+from ..analysis import equilibrium_angles, exact_period, find_equilibrium, linearized_solution
+from ..analysis import spectrum as power_spectrum
+from ..model import PendulumModel
+from ..simulate import Trajectory
+from .figures import (
+    KINETIC,
+    LIBRATION,
+    POTENTIAL,
+    ROTATION,
+    SEPARATRIX,
+    TOTAL,
+    broken_at_wraps,
+    get_axes,
+    link_label,
+    new_figure,
+    single_trajectory,
+)
 
 __all__ = [
     "PANELS",
     "chain_frame",
     "draw_pendulum",
-    "new_figure",
     "plot_angles",
-    "plot_arm_projections",
     "plot_energy",
     "plot_energy_error",
     "plot_linear_vs_nonlinear",
+    "plot_link_projections",
     "plot_period_vs_amplitude",
     "plot_phase",
     "plot_phase_portrait",
     "plot_spectrum",
-    "wrap_angle",
 ]
-
-# Colours used for the same quantity everywhere.
-KINETIC, POTENTIAL, TOTAL = "tab:blue", "tab:orange", "black"
-LIBRATION, ROTATION, SEPARATRIX = "tab:blue", "tab:green", "tab:red"
-
-
-def new_figure(
-    nrows: int = 1, ncols: int = 1, *, width: float = 6.4, height: float = 3.6, **subplot_kw
-):
-    """A new Figure and its axes (as ``Figure.subplots`` returns them).
-
-    ``width`` is the whole figure's width and ``height`` that of one row, in
-    inches. The figure uses the constrained layout.
-    """
-    fig = Figure(figsize=(width, height * nrows), layout="constrained")
-    return fig, fig.subplots(nrows, ncols, squeeze=True, **subplot_kw)
-
-
-def _axes(ax: Axes | None, **figure_kw) -> Axes:
-    if ax is None:
-        return new_figure(**figure_kw)[1]
-    if not isinstance(ax, Axes):
-        raise TypeError(f"`ax` must be a matplotlib Axes or None, got {type(ax).__name__}")
-    return ax
-
-
-def _single(traj: Trajectory) -> Trajectory:
-    if not isinstance(traj, Trajectory):
-        raise TypeError(
-            f"`traj` must be a Trajectory (from pl.simulate), got {type(traj).__name__}"
-        )
-    if traj.theta.ndim != 2:
-        raise ValueError(
-            "`traj` must be a single trajectory (angles of shape (N+1, n)); for an ensemble "
-            f"plot one member, got angles of shape {traj.theta.shape}"
-        )
-    return traj
-
-
-_SUBSCRIPTS = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
-
-
-def _arm_label(i: int, n: int) -> str:
-    # Unicode subscripts, not mathtext: mathtext costs milliseconds per label
-    # on every redraw of a live explorer.
-    return "" if n == 1 else str(i + 1).translate(_SUBSCRIPTS)
-
-
-def wrap_angle(theta):
-    """Angles mapped into ``(-pi, pi]``."""
-    wrapped = np.mod(np.asarray(theta, dtype=float) + np.pi, 2 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
-
-
-def _broken_at_wraps(theta: np.ndarray, other: np.ndarray):
-    """Wrapped ``theta`` and ``other`` with NaN inserted where the angle jumps by 2 pi."""
-    wrapped = wrap_angle(theta)
-    jumps = np.nonzero(np.abs(np.diff(wrapped)) > np.pi)[0] + 1
-    return (np.insert(wrapped, jumps, np.nan), np.insert(np.asarray(other, float), jumps, np.nan))
 
 
 # --------------------------------------------------------------------------- time series
@@ -116,8 +63,8 @@ def plot_energy(traj: Trajectory, ax: Axes | None = None) -> Figure:
     >>> [line.get_label() for line in fig.axes[0].lines]
     ['kinetic T', 'potential V', 'total E = T + V']
     """
-    traj = _single(traj)
-    ax = _axes(ax)
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
     ax.plot(traj.t, traj.kinetic, color=KINETIC, label="kinetic T")
     ax.plot(traj.t, traj.potential, color=POTENTIAL, label="potential V")
     ax.plot(traj.t, traj.energy, color=TOTAL, lw=2, label="total E = T + V")
@@ -135,8 +82,8 @@ def plot_energy_error(traj: Trajectory, ax: Axes | None = None, relative: bool =
 
     Exact zeros (the first sample) are not drawn: a log axis cannot show them.
     """
-    traj = _single(traj)
-    ax = _axes(ax)
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
     error = np.abs(traj.relative_energy_error if relative else traj.energy_error)
     shown = np.where(error > 0, error, np.nan)
     ax.plot(traj.t, shown, color=TOTAL, lw=1)
@@ -149,11 +96,11 @@ def plot_energy_error(traj: Trajectory, ax: Axes | None = None, relative: bool =
 
 def plot_angles(traj: Trajectory, ax: Axes | None = None) -> Figure:
     """Each angle ``theta_i(t)`` [rad] (not wrapped: a full turn adds 2 pi)."""
-    traj = _single(traj)
-    ax = _axes(ax)
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
     n = traj.theta.shape[1]
     for i in range(n):
-        ax.plot(traj.t, traj.theta[:, i], label=f"θ{_arm_label(i, n)}")
+        ax.plot(traj.t, traj.theta[:, i], label=f"θ{link_label(i, n)}")
     ax.set(xlabel="t (s)", ylabel="angle (rad)", title="Angles")
     if n > 1:
         ax.legend(loc="upper right", fontsize="small")
@@ -161,41 +108,39 @@ def plot_angles(traj: Trajectory, ax: Axes | None = None) -> Figure:
 
 
 # --------------------------------------------------------------------------- phase space
-def plot_phase(traj: Trajectory, ax: Axes | None = None, arm: int | None = None) -> Figure:
+def plot_phase(traj: Trajectory, ax: Axes | None = None, link: int | None = None) -> Figure:
     """Phase-space projections ``(theta_i, omega_i)``, angles wrapped into ``(-pi, pi]``.
 
     Parameters
     ----------
     traj : Trajectory
     ax : Axes, optional
-    arm : int, optional
-        Draw only this arm (0-based); by default all arms, overlaid.
+    link : int, optional
+        Draw only this link (0-based); by default all links, overlaid.
     """
-    traj = _single(traj)
-    ax = _axes(ax)
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
     n = traj.theta.shape[1]
-    arms = range(n) if arm is None else [arm]
-    for i in arms:
-        if not 0 <= i < n:
-            raise ValueError(f"`arm` must be in [0, {n - 1}], got {i}")
-        x, y = _broken_at_wraps(traj.theta[:, i], traj.omega[:, i])
+    links = range(n) if link is None else [check.index_below("link", link, n)]
+    for i in links:
+        x, y = broken_at_wraps(traj.theta[:, i], traj.omega[:, i])
         (line,) = ax.plot(x, y, lw=0.8, label=f"arm {i + 1}")
         ax.plot(x[0], y[0], "o", color=line.get_color(), ms=5)
-    single_arm = len(arms) == 1 and n > 1
-    sub = _arm_label(arms[0], n) if len(arms) == 1 else "ᵢ"
+    single_link = len(links) == 1 and n > 1
+    sub = link_label(links[0], n) if len(links) == 1 else "ᵢ"
     ax.set(
         xlabel=f"θ{sub} (rad)",
         ylabel=f"ω{sub} (rad/s)",
-        title=f"Arm {arms[0] + 1}" if single_arm else "Phase space",
+        title=f"Arm {links[0] + 1}" if single_link else "Phase space",
         xlim=(-np.pi, np.pi),
     )
-    if len(arms) > 1:
+    if len(links) > 1:
         ax.legend(loc="upper right", fontsize="small")
     return ax.figure
 
 
-def plot_arm_projections(traj: Trajectory, axes=None) -> Figure:
-    """One panel per arm: the projection ``(theta_i, omega_i)`` of the trajectory.
+def plot_link_projections(traj: Trajectory, axes=None) -> Figure:
+    """One panel per link: the projection ``(theta_i, omega_i)`` of the trajectory.
 
     For the double pendulum the motion lives in a 4-dimensional phase space;
     each panel is a shadow of it, so curves may cross themselves.
@@ -206,14 +151,14 @@ def plot_arm_projections(traj: Trajectory, axes=None) -> Figure:
     axes : sequence of Axes, optional
         ``n`` axes; by default a new row of ``n`` panels.
     """
-    traj = _single(traj)
+    traj = single_trajectory(traj)
     n = traj.theta.shape[1]
     if axes is None:
         axes = np.atleast_1d(new_figure(1, n, width=4.0 * n, height=3.6)[1])
     if len(axes) != n:
-        raise ValueError(f"`axes` must hold {n} Axes (one per arm), got {len(axes)}")
+        raise ValueError(f"`axes` must hold {n} Axes (one per link), got {len(axes)}")
     for i, ax in enumerate(axes):
-        plot_phase(traj, ax=ax, arm=i)
+        plot_phase(traj, ax=ax, link=i)
     return axes[0].figure
 
 
@@ -247,9 +192,9 @@ def plot_phase_portrait(
     if not isinstance(model, PendulumModel) or model.n != 1:
         raise ValueError(
             "`model` must be a simple pendulum (n = 1) for a phase portrait; "
-            "for more arms use plot_arm_projections"
+            "for more links use plot_link_projections"
         )
-    ax = _axes(ax)
+    ax = get_axes(ax)
     mass, length, g = model.masses[0], model.lengths[0], model.g
     top_speed = 2.0 * np.sqrt(abs(g) / length)
     omega_max = 1.6 * top_speed if omega_max is None else float(omega_max)
@@ -289,8 +234,8 @@ def plot_phase_portrait(
     ax.plot([], [], color=ROTATION, label="rotation")
     ax.plot([], [], color=SEPARATRIX, lw=2, label="separatrix")
     if trajectory is not None:
-        traj = _single(trajectory)
-        x, y = _broken_at_wraps(traj.theta[:, 0], traj.omega[:, 0])
+        traj = single_trajectory(trajectory)
+        x, y = broken_at_wraps(traj.theta[:, 0], traj.omega[:, 0])
         ax.plot(x, y, color="black", lw=2.2, label="trajectory")
         ax.plot(x[0], y[0], "o", color="gold", mec="black", ms=9, zorder=5)
     ax.set(
@@ -319,7 +264,7 @@ def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=Non
     theta = np.asarray(theta, dtype=float)
     if theta.shape != (model.n,):
         raise ValueError(f"`theta` must have shape ({model.n},), got {theta.shape}")
-    ax = _axes(ax, width=4.0, height=4.0)
+    ax = get_axes(ax, width=4.0, height=4.0)
     if trail is not None:
         tx, ty = model.positions(np.asarray(trail, dtype=float))
         ax.plot(tx[:, -1], ty[:, -1], color="tab:purple", lw=0.7, alpha=0.5)
@@ -353,12 +298,13 @@ def plot_linear_vs_nonlinear(
     exceeds ``clip`` (near a saddle it grows exponentially and would otherwise
     flatten the nonlinear curve).
     """
-    traj = _single(traj)
-    eq = analysis._equilibrium(model, equilibrium)
+    traj = single_trajectory(traj)
+    eq = find_equilibrium(model, equilibrium)
     if axes is None:
         axes = new_figure(1, 2, width=10.0, height=3.6, sharey=True)[1]
-    angles = np.array([float(a) for a in eq.angles])
-    linear, _ = analysis.linearized_solution(model, eq, traj.theta[0], traj.omega[0], traj.t)
+    angles = equilibrium_angles(model, eq)
+    linear, _ = linearized_solution(model, traj.theta[0], traj.omega[0], t=traj.t,
+                                    equilibrium=eq)
     linear = linear - angles
     linear[np.maximum.accumulate(np.any(np.abs(linear) > clip, axis=1))] = np.nan
     offsets = traj.theta - angles
@@ -369,7 +315,7 @@ def plot_linear_vs_nonlinear(
                 traj.t,
                 data[:, i],
                 color=f"C{i}",
-                label=f"θ{_arm_label(i, n)} − θ{_arm_label(i, n)}*",
+                label=f"θ{link_label(i, n)} − θ{link_label(i, n)}*",
             )
         ax.set(xlabel="t (s)", title=f"{title} near {eq.name}")
         ax.legend(loc="upper left", fontsize="small")
@@ -384,11 +330,11 @@ def plot_period_vs_amplitude(
 
     The dashed line is the small-angle period ``2 pi sqrt(l / g)``.
     """
-    ax = _axes(ax)
+    ax = get_axes(ax)
     dense = np.linspace(0.0, 0.995 * np.pi, 400)
     ax.plot(
         dense,
-        analysis.exact_period(model, dense),
+        exact_period(model, dense),
         color="black",
         label=r"exact $4\sqrt{l/g}\,K(\sin^2(\theta_0/2))$",
     )
@@ -414,13 +360,13 @@ def plot_spectrum(
     traj: Trajectory,
     ax: Axes | None = None,
     marks=(),
-    arm: int | None = None,
+    link: int | None = None,
     omega_max: float | None = None,
 ) -> Figure:
     """Power spectrum of the angles (log scale) with vertical lines at ``marks`` [rad/s]."""
-    traj = _single(traj)
-    ax = _axes(ax)
-    omega, power = analysis.spectrum(traj, arm=arm)
+    traj = single_trajectory(traj)
+    ax = get_axes(ax)
+    omega, power = power_spectrum(traj, link=link)
     ax.semilogy(omega, np.maximum(power, 1e-16), color="black", lw=1)
     for k, mark in enumerate(marks):
         ax.axvline(mark, color="tab:red", ls="--", lw=1, label="predicted" if k == 0 else None)
@@ -474,7 +420,7 @@ PANELS: dict[str, Callable[[Axes, Trajectory, PendulumModel], None]] = {
 """Single-axes drawings by name, each ``(ax, trajectory, model) -> None``:
 
 ``energy`` (kinetic, potential, total), ``energy_error`` (relative, log
-scale), ``angles``, ``phase`` (all arms overlaid), ``portrait`` (simple
+scale), ``angles``, ``phase`` (all links overlaid), ``portrait`` (simple
 pendulum only: level sets of H with the trajectory), ``pendulum`` (final
 configuration with the last bob's path).
 """

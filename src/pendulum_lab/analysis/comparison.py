@@ -1,0 +1,367 @@
+"""Comparing methods: work-precision, a DOP853 reference run, one table row per method.
+
+Each function returns numbers a test or a notebook can assert on; the
+figures of these results are in :mod:`pendulum_lab.plotting` and their
+Markdown table in :mod:`pendulum_lab.tables`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import _validation as check
+from ..integrators import get_method
+from ..model import PendulumModel
+from ..simulate import Trajectory, simulate, velocity_state
+from .accuracy import dop853, energy_growth, observed_order, order_steps
+from .structure import reversibility_error, symplecticity_defect
+
+__all__ = [
+    "ComparisonRow",
+    "EnergyComparison",
+    "ReferenceRun",
+    "WorkPrecision",
+    "compare_energy",
+    "compare_trajectory",
+    "dop853_run",
+    "dop853_work_precision",
+    "pendulum_name",
+    "work_precision",
+]
+
+
+@dataclass(frozen=True)
+class WorkPrecision:
+    """Cost and energy accuracy of one run.
+
+    Attributes
+    ----------
+    method : str
+    setting : float
+        The step ``dt`` for a fixed-step method, the tolerance ``rtol`` for DOP853.
+    energy_error : float
+        ``max |H - H(0)|`` over the saved states of the run.
+    wall_time : float
+        Seconds spent integrating.
+    evaluations : int
+        Vector-field evaluations (both of Hamilton's equations, or the
+        acceleration, at one state count as one).
+    completed : bool
+    """
+
+    method: str
+    setting: float
+    energy_error: float
+    wall_time: float
+    evaluations: int
+    completed: bool
+
+
+def work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float, dts,
+                   method="glrk4", p0=None, repeats: int = 1) -> list[WorkPrecision]:
+    """Energy error against cost for a fixed-step method at several step sizes.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0, p0 : array_like, shape (n,)
+        The initial state (give ``omega0`` or ``p0``).
+    t_end : float
+    dts : sequence of float
+        Step sizes, each ``> 0``.
+    method : str or Method
+    repeats : int
+        Run each step size this many times and keep the shortest wall time
+        (runs of a few milliseconds are noisy), ``>= 1``.
+
+    Returns
+    -------
+    list of WorkPrecision
+        One per step size, in the order given.
+    """
+    method = get_method(method)
+    repeats = check.integer_at_least("repeats", repeats, 1)
+    points = []
+    for dt in dts:
+        runs = [simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method, p0=p0,
+                         progress=False) for _ in range(repeats)]
+        traj = runs[0]
+        points.append(WorkPrecision(method.name, float(dt),
+                                    float(np.max(np.abs(traj.energy_error))),
+                                    min(run.wall_time for run in runs), traj.evaluations,
+                                    traj.completed))
+    return points
+
+
+@dataclass(frozen=True)
+class ReferenceRun:
+    """A run of SciPy's adaptive DOP853.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N+1,)
+        The solver's accepted step times.
+    theta, omega : ndarray, shape (N+1, n)
+    energy_error : ndarray, shape (N+1,)
+        ``E(t) - E(0)``.
+    rtol : float
+    wall_time : float
+    evaluations : int
+        Right-hand-side evaluations (``nfev``), each one acceleration.
+    """
+
+    t: np.ndarray
+    theta: np.ndarray
+    omega: np.ndarray
+    energy_error: np.ndarray
+    rtol: float
+    wall_time: float
+    evaluations: int
+
+
+def dop853_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
+               rtol: float = 1e-10, p0=None) -> ReferenceRun:
+    """Integrate with ``scipy.integrate.solve_ivp(method="DOP853")``.
+
+    This is the general-purpose adaptive eighth-order method a student would
+    otherwise reach for; it is neither symplectic nor fixed-step. It steps
+    ``(theta, omega)`` with the model's accelerations (one evaluation per
+    right-hand side, as for the velocity methods); ``atol`` equals ``rtol``.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0, p0 : array_like, shape (n,)
+        The initial state (give ``omega0`` or ``p0``).
+    t_end : float
+        ``> 0``.
+    rtol : float
+        Relative (and absolute) tolerance, in ``[1e-14, 1e-2]``.
+
+    Returns
+    -------
+    ReferenceRun
+    """
+    n = model.n
+    theta0, omega0 = velocity_state(model, theta0, omega0, p0, single=True)
+    t_end = check.positive_number("t_end", t_end)
+    rtol = check.number_in("rtol", rtol, 1e-14, 1e-2)
+    start = time.perf_counter()
+    sol = dop853(model, theta0, omega0, t_end, rtol)
+    wall = time.perf_counter() - start
+    theta, omega = sol.y[:n].T, sol.y[n:].T
+    energy = model.energy(theta, omega)
+    return ReferenceRun(sol.t, theta, omega, energy - energy[0], rtol, wall, int(sol.nfev))
+
+
+def dop853_work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float,
+                          rtols, p0=None, repeats: int = 1) -> list[WorkPrecision]:
+    """:func:`work_precision` for DOP853 at several tolerances ``rtols``."""
+    repeats = check.integer_at_least("repeats", repeats, 1)
+    points = []
+    for rtol in rtols:
+        runs = [dop853_run(model, theta0, omega0, t_end=t_end, rtol=rtol, p0=p0)
+                for _ in range(repeats)]
+        points.append(WorkPrecision("DOP853", float(rtol),
+                                    float(np.max(np.abs(runs[0].energy_error))),
+                                    min(run.wall_time for run in runs), runs[0].evaluations, True))
+    return points
+
+
+@dataclass(frozen=True)
+class ComparisonRow:
+    """One method on one problem: the numbers of the comparison table.
+
+    Attributes
+    ----------
+    pendulum : str
+        ``"simple"``, ``"double"`` or ``"n=3"`` and so on.
+    method : str
+    variables : str
+        ``"canonical"`` or ``"velocity"``.
+    order : int
+        The method's classical order.
+    observed_order : float
+        Fitted slope of the global error at ``order_t_end`` against ``dt``.
+    energy_first, energy_last : float
+        Largest ``|E - E0|`` in the first and last tenth of the run
+        (:func:`energy_growth`).
+    max_relative_energy_error : float
+        Largest ``|E - E0| / |E0|`` over the run.
+    symplecticity_defect, reversibility_error : float
+        At the run's initial state, step ``check_dt``.
+    t_end, dt : float
+    wall_time : float
+    evaluations : int
+    mean_iterations : float
+    completed : bool
+    """
+
+    pendulum: str
+    method: str
+    variables: str
+    order: int
+    observed_order: float
+    energy_first: float
+    energy_last: float
+    max_relative_energy_error: float
+    symplecticity_defect: float
+    reversibility_error: float
+    t_end: float
+    dt: float
+    wall_time: float
+    evaluations: int
+    mean_iterations: float
+    completed: bool
+
+
+def pendulum_name(model: PendulumModel) -> str:
+    """``"simple"``, ``"double"``, or ``"n=3"`` and so on."""
+    return {1: "simple", 2: "double"}.get(model.n, f"n={model.n}")
+
+
+def compare_trajectory(model: PendulumModel, traj: Trajectory, *, order_t_end: float = 1.0,
+                       order_dts=None, reference=None,
+                       check_dt: float = 0.1) -> ComparisonRow:
+    """Measure the method that made ``traj``: energy behaviour, order, structure.
+
+    The energy columns come from ``traj``. The observed order is fitted by
+    :func:`observed_order` from ``traj``'s initial state over ``order_t_end``;
+    the symplecticity defect and reversibility error are those of one step of
+    size ``check_dt`` from the same initial state.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        The model ``traj`` was computed with.
+    traj : Trajectory
+        A single trajectory (not an ensemble).
+    order_t_end : float
+    order_dts : sequence of float, optional
+        Each must divide ``order_t_end`` into whole steps; by default
+        :func:`order_steps` of the method.
+    reference : tuple of ndarray, optional
+        ``(theta, omega)`` at ``order_t_end`` from ``traj``'s initial state;
+        computed by :func:`reference_solution` if not given. Pass it to reuse
+        one reference for several methods.
+    check_dt : float
+        Step of the symplecticity and reversibility checks, ``> 0``. At the
+        default 0.1 s the symplectic methods show defects of about 1e-10
+        (finite-difference noise) and RK4, the least non-symplectic method
+        here, 1e-7 on the simple pendulum: a wide gap. At smaller steps
+        RK4's defect, which shrinks like ``h**6``, comes close to the noise.
+
+    Returns
+    -------
+    ComparisonRow
+    """
+    if traj.theta.ndim != 2:
+        raise ValueError("`traj` must be a single trajectory (angles of shape (N+1, n)), "
+                         f"got angles of shape {traj.theta.shape}")
+    if traj.theta.shape[1] != model.n:
+        raise ValueError(f"`traj` has {traj.theta.shape[1]} angle(s) but `model` has "
+                         f"{model.n} link(s)")
+    check_dt = check.positive_number("check_dt", check_dt)
+    theta0, omega0, p0 = traj.theta[0], traj.omega[0], traj.p[0]
+    if order_dts is None:
+        order_dts = order_steps(traj.method)
+    order = observed_order(model, theta0, omega0, t_end=order_t_end, dts=order_dts,
+                           method=traj.method, reference=reference)
+    first, last = energy_growth(traj)
+    return ComparisonRow(
+        pendulum=pendulum_name(model),
+        method=traj.method.name,
+        variables=traj.method.variables,
+        order=traj.method.order,
+        observed_order=order.slope,
+        energy_first=first,
+        energy_last=last,
+        max_relative_energy_error=float(np.max(np.abs(traj.relative_energy_error))),
+        symplecticity_defect=symplecticity_defect(model, theta0, p0=p0, dt=check_dt,
+                                                  method=traj.method),
+        reversibility_error=reversibility_error(model, theta0, p0=p0, dt=check_dt,
+                                                method=traj.method),
+        t_end=float(traj.t[-1]),
+        dt=traj.dt,
+        wall_time=traj.wall_time,
+        evaluations=traj.evaluations,
+        mean_iterations=traj.mean_iterations,
+        completed=traj.completed,
+    )
+
+
+@dataclass(frozen=True)
+class EnergyComparison:
+    """One initial state integrated by several methods.
+
+    Attributes
+    ----------
+    trajectories : dict
+        ``{method name: Trajectory}``.
+    """
+
+    trajectories: dict
+
+    def growth(self, fraction: float = 0.1) -> dict:
+        """``{method: (first, last)}``: largest ``|E - E0|`` in the first and last ``fraction``.
+
+        See :func:`pendulum_lab.analysis.energy_growth`. A ratio last/first
+        near 1 means a bounded energy error, a large ratio a drift.
+        """
+        return {name: energy_growth(traj, fraction) for name, traj in self.trajectories.items()}
+
+    def max_relative_error(self) -> dict:
+        """``{method: max |E - E0| / |E0|}`` over the run."""
+        return {
+            name: float(np.max(np.abs(traj.relative_energy_error)))
+            for name, traj in self.trajectories.items()
+        }
+
+    def plot(self, ax=None):
+        """``|E - E0| / |E0|`` against time, log scale, one line per method; returns the Figure.
+
+        Exact zeros are not drawn (a log axis cannot show them).
+        """
+        from ..plotting import plot_energy_comparison
+
+        return plot_energy_comparison(self, ax=ax)
+
+
+def compare_energy(
+    model: PendulumModel,
+    theta0,
+    omega0=None,
+    *,
+    t_end: float,
+    dt: float = 0.01,
+    methods=("explicit_euler", "rk4", "leapfrog", "glrk4"),
+    save_every: int = 1,
+    p0=None,
+    progress: bool | None = None,
+) -> EnergyComparison:
+    """Integrate one initial state with each of ``methods``.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0, p0 : array_like, shape (n,)
+    t_end, dt, save_every, progress
+        As for :func:`~pendulum_lab.simulate`.
+    methods : sequence of str
+        Keys of :data:`pendulum_lab.METHODS`.
+
+    Returns
+    -------
+    EnergyComparison
+    """
+    check.pendulum_model(model)
+    return EnergyComparison(
+        {
+            get_method(m).name: simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=m,
+                                         save_every=save_every, p0=p0, progress=progress)
+            for m in methods
+        }
+    )

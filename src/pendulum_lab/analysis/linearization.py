@@ -1,0 +1,166 @@
+"""Motion near an equilibrium: the linearised equations and their exact solution.
+
+Each of the ``2**n`` equilibria of a chain (every link straight down or up)
+is named in ``model.chain.equilibria`` (``"down"``, ``"down-up"``, ...). About
+the all-down one the linearised motion is a sum of normal modes; about any of
+them it is ``x(t) = exp(A t) x(0)`` with the equilibrium's Jacobian ``A``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import expm
+
+from .. import _validation as check
+from ..mechanics import Equilibrium
+from ..model import PendulumModel
+from ..simulate import velocity_state
+
+__all__ = [
+    "equilibrium_angles",
+    "find_equilibrium",
+    "linearized_solution",
+    "normal_mode_frequencies",
+    "rest_state_at_energy",
+]
+
+
+def find_equilibrium(model: PendulumModel, equilibrium=None) -> Equilibrium:
+    """The equilibrium named ``equilibrium`` (or given as one), all links down by default.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    equilibrium : str or Equilibrium, optional
+        A name from ``[eq.name for eq in model.chain.equilibria]`` or one of
+        those objects.
+    """
+    check.pendulum_model(model)
+    if equilibrium is None:
+        return model.chain.equilibria[0]
+    if isinstance(equilibrium, str):
+        return model.chain.equilibrium(equilibrium)
+    if equilibrium in model.chain.equilibria:
+        return equilibrium
+    names = [eq.name for eq in model.chain.equilibria]
+    raise TypeError(f"`equilibrium` must be a name in {names} or one of model.chain.equilibria")
+
+
+def equilibrium_angles(model: PendulumModel, equilibrium=None) -> np.ndarray:
+    """The angles of an equilibrium as floats (0 or pi each), shape ``(n,)``.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> equilibrium_angles(pl.double_pendulum(), "down-up").tolist()
+    [0.0, 3.141592653589793]
+    """
+    return np.array([float(a) for a in find_equilibrium(model, equilibrium).angles])
+
+
+def normal_mode_frequencies(model: PendulumModel) -> np.ndarray:
+    """Small-oscillation angular frequencies [rad/s] about the all-down equilibrium.
+
+    They are ``sqrt(-mu)`` for the eigenvalues ``mu`` of ``M^-1 dF/dq`` there,
+    i.e. the imaginary parts of the Jacobian's eigenvalues ``+-i omega``.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Ascending.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> np.round(normal_mode_frequencies(pl.simple_pendulum(length=1.0, g=4.0)), 12)
+    array([2.])
+    """
+    down = find_equilibrium(model)
+    ratio = np.array(down.stiffness_ratio.subs(model.parameter_values), dtype=float)
+    mus = np.linalg.eigvals(ratio).real
+    if np.any(mus >= 0):
+        raise ValueError(f"the all-down equilibrium is not a center for g = {model.g}")
+    return np.sort(np.sqrt(-mus))
+
+
+def linearized_solution(model: PendulumModel, theta0, omega0=None, *, t, equilibrium=None,
+                        p0=None):
+    """Solution of the equations linearised about an equilibrium.
+
+    With ``x = (theta - theta*, omega)`` and the Jacobian ``A`` at the
+    equilibrium, ``x(t) = exp(A t) x(0)``.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0, p0 : array_like, shape (n,)
+        Initial angles (absolute, not offsets) and angular velocities (or
+        momenta ``p0``).
+    t : array_like, shape (N,)
+        Times [s].
+    equilibrium : str or Equilibrium, optional
+        A name from ``[eq.name for eq in model.chain.equilibria]``
+        (``"down"``, ``"up"`` for one link; ``"down-up"`` and so on for two);
+        all links down by default.
+
+    Returns
+    -------
+    theta, omega : ndarray, shape (N, n)
+        Absolute angles and angular velocities of the linear motion.
+    """
+    eq = find_equilibrium(model, equilibrium)
+    n = model.n
+    theta0, omega0 = velocity_state(model, theta0, omega0, p0)
+    if theta0.ndim != 1:
+        raise ValueError("`theta0` and `omega0` must have shape (n,)")
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1:
+        raise ValueError(f"`t` must be a 1-D array of times, got shape {t.shape}")
+    angles = equilibrium_angles(model, eq)
+    jac = np.array(eq.jacobian.subs(model.parameter_values), dtype=float)
+    x = np.empty((len(t), 2 * n))
+    if len(t):
+        x[0] = expm(jac * t[0]) @ np.concatenate([theta0 - angles, omega0])
+    spacing = np.diff(t)
+    if len(t) > 1 and np.allclose(spacing, spacing[0], rtol=1e-9, atol=0):
+        # A uniform grid: one matrix exponential, then repeated products.
+        propagator = expm(jac * spacing[0])
+        for k in range(1, len(t)):
+            x[k] = propagator @ x[k - 1]
+    else:
+        for k in range(1, len(t)):
+            x[k] = expm(jac * (t[k] - t[0])) @ x[0]
+    return angles + x[:, :n], x[:, n:]
+
+
+def rest_state_at_energy(model: PendulumModel, energy: float) -> np.ndarray:
+    """Angles of a state at rest with total energy ``energy``, all links at one angle.
+
+    With every ``theta_i = phi`` the potential energy is ``-c cos(phi)``, where
+    ``c = -V(0)`` (``V`` is zero at the pivot's height), so
+    ``phi = arccos(-energy / c)``. Use it to start runs on a chosen energy
+    level, from the bottom (``energy = -c``) to everything straight up
+    (``energy = c``).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> dp = pl.double_pendulum()
+    >>> theta = rest_state_at_energy(dp, 0.0)
+    >>> bool(np.allclose(theta, np.pi / 2)), bool(abs(dp.potential_energy(theta)) < 1e-12)
+    (True, True)
+    """
+    energy = check.real_number("energy", energy)
+    depth = -float(model.potential_energy(np.zeros(model.n)))
+    if depth <= 0:
+        raise ValueError(f"the model's `g` must be positive, got {model.g}")
+    if abs(energy) > depth:
+        raise ValueError(
+            f"`energy` must lie in [{-depth:.6g}, {depth:.6g}] J for a state at rest "
+            f"(all down to all up), got {energy}"
+        )
+    return np.full(model.n, np.arccos(-energy / depth))

@@ -1,0 +1,54 @@
+"""Chaos in the double pendulum, and longer chains.
+
+The course report (Kanoun, Cowley, Ivachtchenko, MAT332, 2024) observes that
+small changes of the initial conditions of the double pendulum give radically
+different motion. This package turns that into measurements, one topic per
+module:
+
+* :mod:`.separation`: phase-space distance of two nearby trajectories
+  (:func:`separation`);
+* :mod:`.lyapunov`: the largest Lyapunov exponent by two independent methods
+  (:func:`lyapunov_benettin`, :func:`lyapunov_variational`);
+* :mod:`.sections`: Poincare sections on energy levels, crossings located to
+  round-off (:func:`section_states`, :func:`poincare_section`,
+  :func:`energy_sections`);
+* :mod:`.flips`: Heyl's flip-time fractal (:func:`can_flip`,
+  :func:`flip_time_map`);
+* :mod:`.small_angles`: where the linearised and the full motion part
+  (:func:`small_angle_comparison`).
+
+Every trajectory comes from :func:`pendulum_lab.simulate` (an ensemble is a
+batch of initial states) or, for runs examined piece by piece, from
+:func:`pendulum_lab.simulate_segments`; crossings are located by
+:mod:`pendulum_lab.events`. Nothing here steps the equations of motion
+itself. The figures of these results are in :mod:`pendulum_lab.plotting`.
+
+Notes
+-----
+Phase-space distances are Euclidean in the canonical variables
+``(theta, p)`` (radians and kg m^2/s). The largest Lyapunov exponent does not
+depend on that choice of norm; finite-time estimates do, a little.
+"""
+
+from .flips import FlipMap, can_flip, flip_time_map
+from .lyapunov import LyapunovEstimate, lyapunov_benettin, lyapunov_variational
+from .sections import PoincareSection, energy_sections, poincare_section, section_states
+from .separation import Separation, separation
+from .small_angles import SmallAngleComparison, small_angle_comparison
+
+__all__ = [
+    "FlipMap",
+    "LyapunovEstimate",
+    "PoincareSection",
+    "Separation",
+    "SmallAngleComparison",
+    "can_flip",
+    "energy_sections",
+    "flip_time_map",
+    "lyapunov_benettin",
+    "lyapunov_variational",
+    "poincare_section",
+    "section_states",
+    "separation",
+    "small_angle_comparison",
+]

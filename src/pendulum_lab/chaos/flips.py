@@ -1,0 +1,213 @@
+"""Heyl's flip-time fractal: how long until an arm of a double pendulum passes the top.
+
+References
+----------
+.. [Heyl] J. S. Heyl, "The double pendulum fractal", 2008.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import _validation as check
+from ..events import find_crossings
+from ..integrators import get_method
+from ..model import PendulumModel
+from ..segments import simulate_segments
+from ..simulate import time_grid
+from ._common import require_finite
+
+__all__ = ["FlipMap", "can_flip", "flip_time_map"]
+
+
+def can_flip(model: PendulumModel, theta, omega=None) -> np.ndarray:
+    """Whether energy allows any arm to pass over the top (``|theta_i| = pi``).
+
+    With ``w_j = g l_j (m_j + ... + m_n)`` the potential energy is
+    ``V = -sum_j w_j cos(theta_j)``. Arm ``i`` upside down (``theta_i = pi``)
+    costs at least ``V_i = w_i - sum_{j != i} |w_j|`` (every other arm as low
+    as it can be). Energy is conserved and kinetic energy is not negative, so
+    if ``E < min_i V_i`` no arm can ever flip. For the double pendulum
+    ``min_i V_i = -g |(m_1 + m_2) l_1 - m_2 l_2|``; released at rest with
+    ``m = l = 1`` that reads ``2 cos(theta_1) + cos(theta_2) > 1`` for "cannot
+    flip". (The often-quoted ``3 cos(theta_1) + cos(theta_2) > 2`` is the same
+    bound for two uniform rods, whose centres of mass sit at mid-length.)
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta : array_like, shape (..., n)
+    omega : array_like, shape (..., n), optional
+        Angular velocities; at rest by default.
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+        True where the energy is at least the flipping threshold.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> dp = pl.double_pendulum()
+    >>> can_flip(dp, [[0.5, 0.5], [2.0, 2.5]]).tolist()
+    [False, True]
+    """
+    check.pendulum_model(model)
+    theta = check.state_array("theta", theta, model.n)
+    omega = np.zeros_like(theta) if omega is None else check.state_array("omega", omega, model.n)
+    energy = model.energy(theta, omega)
+    return energy >= _flip_threshold(model)
+
+
+def _flip_threshold(model) -> float:
+    tail_mass = np.cumsum(np.asarray(model.masses)[::-1])[::-1]
+    w = model.g * np.asarray(model.lengths) * tail_mass
+    return float(np.min(w - (np.sum(np.abs(w)) - np.abs(w))))
+
+
+@dataclass(frozen=True)
+class FlipMap:
+    """Time until either arm of a double pendulum released at rest flips over.
+
+    Attributes
+    ----------
+    theta1 : ndarray, shape (N1,)
+    theta2 : ndarray, shape (N2,)
+        Grid of initial angles [rad]; exactly symmetric about 0.
+    time : ndarray, shape (N2, N1)
+        Flip time [s] (row = ``theta2``, column = ``theta1``); ``inf`` where no
+        arm flipped before ``t_end`` or where energy forbids it.
+    forbidden : ndarray of bool, shape (N2, N1)
+        Cells that cannot flip on energy grounds (not simulated).
+    t_end, dt : float
+    method : str
+    wall_time : float
+    """
+
+    theta1: np.ndarray
+    theta2: np.ndarray
+    time: np.ndarray
+    forbidden: np.ndarray
+    t_end: float
+    dt: float
+    method: str
+    wall_time: float
+
+    def plot(self, ax=None, colorbar: bool = True):
+        """The map with a logarithmic colour scale; returns the Figure.
+
+        Energy-forbidden cells are grey, cells that did not flip before
+        ``t_end`` white.
+        """
+        from ..plotting import plot_flip_map
+
+        return plot_flip_map(self, ax=ax, colorbar=colorbar)
+
+
+def _symmetric_grid(size: int, half_width: float) -> np.ndarray:
+    """``size`` points on ``[-half_width, half_width]``, exactly symmetric about 0."""
+    if size == 1:
+        return np.zeros(1)
+    return (2.0 * np.arange(size) - (size - 1)) * (half_width / (size - 1))
+
+
+def flip_time_map(
+    model: PendulumModel,
+    size=20,
+    *,
+    t_end: float = 10.0,
+    dt: float = 0.01,
+    method="rk4",
+    half_width: float = 3.0,
+    progress: bool | None = None,
+) -> FlipMap:
+    """Heyl's flip-time map: time until either arm passes over the top.
+
+    Every cell of a grid of initial angles ``(theta_1, theta_2)``, released at
+    rest, is integrated until an arm flips (the unwrapped ``|theta_i|``
+    reaches ``pi``; the time is interpolated linearly between steps) or until
+    ``t_end``. Cells that cannot flip on energy grounds (:func:`can_flip`)
+    are not simulated. The whole grid is one ensemble run in segments; cells
+    that have flipped leave the ensemble at the end of their segment.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A double pendulum.
+    size : int or (int, int)
+        Grid points along ``theta_1`` and ``theta_2``.
+    t_end : float
+        Time limit [s].
+    dt : float
+        Step size [s].
+    method : str or Method
+        Integrator; RK4 by default: over a few seconds its error is far below
+        what the map can show, and it is the cheapest fourth-order method.
+    half_width : float
+        The grid covers ``[-half_width, half_width]^2``, ``0 < half_width < pi``.
+    progress : bool, optional
+
+    Returns
+    -------
+    FlipMap
+
+    Notes
+    -----
+    The equations are odd in ``(theta, p)``, so ``theta -> -theta`` maps a
+    trajectory to its mirror image and the map is symmetric under a half
+    turn of the grid; the grid is built to be exactly symmetric so this holds
+    to round-off.
+
+    References
+    ----------
+    J. S. Heyl, "The double pendulum fractal", 2008.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> fm = flip_time_map(pl.double_pendulum(), size=6, t_end=2.0)
+    >>> fm.time.shape, bool(fm.forbidden[2:4, 2:4].all())
+    ((6, 6), True)
+    """
+    check.pendulum_model(model)
+    if model.n != 2:
+        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    n1, n2 = (size, size) if np.ndim(size) == 0 else tuple(size)
+    n1 = check.integer_at_least("size", n1, 1)
+    n2 = check.integer_at_least("size", n2, 1)
+    half_width = check.positive_number("half_width", half_width)
+    if half_width >= np.pi:
+        raise ValueError(
+            f"`half_width` must be below pi (the grid starts below the top), got {half_width}"
+        )
+    t_end, dt, _ = time_grid(t_end, dt)
+    theta1 = _symmetric_grid(n1, half_width)
+    theta2 = _symmetric_grid(n2, half_width)
+    grid = np.stack(np.meshgrid(theta1, theta2), axis=-1)
+    forbidden = ~can_flip(model, grid)
+    flip = np.full(forbidden.shape, np.inf)
+    cells = np.flatnonzero(~forbidden)
+    theta = grid.reshape(-1, 2)[cells]
+    method = get_method(method)
+    start = time.perf_counter()
+    if cells.size:
+        run = simulate_segments(model, theta, np.zeros_like(theta), t_end=t_end, dt=dt,
+                                method=method, progress=progress, label="flip-time map")
+        for segment in run:
+            require_finite(segment, "flip_time_map")
+            # An arm flips when the larger |theta_i| passes pi (upwards).
+            height = np.max(np.abs(segment.theta), axis=-1)
+            flips = find_crossings(height, direction=1, level=np.pi).first()
+            flip.flat[cells[run.members[flips.member]]] = (
+                segment.t[0] + (flips.step + flips.fraction()) * dt
+            )
+            # Cells that have flipped leave the ensemble.
+            stay = np.ones(len(run.members), dtype=bool)
+            stay[flips.member] = False
+            run.keep(stay)
+    return FlipMap(
+        theta1, theta2, flip, forbidden, t_end, dt, method.name, time.perf_counter() - start
+    )

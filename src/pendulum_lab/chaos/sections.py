@@ -1,0 +1,407 @@
+"""Poincare sections: crossings of a surface located to round-off.
+
+References
+----------
+.. [Henon] M. Henon, "On the numerical computation of Poincare maps",
+   Physica D 5 (1982) 412-414.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import _validation as check
+from .._angles import wrap_angle
+from ..events import check_direction, find_crossings, land
+from ..model import PendulumModel
+from ..segments import simulate_segments
+from ..simulate import step
+from ._common import require_finite
+
+__all__ = ["PoincareSection", "energy_sections", "poincare_section", "section_states"]
+
+
+def section_states(
+    model: PendulumModel,
+    energy: float,
+    theta_rest,
+    p_rest,
+    *,
+    link: int = 0,
+    value: float = 0.0,
+    direction: int = 1,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Initial states on the surface ``theta_link = value`` with a given energy.
+
+    The other angles and momenta are given; the remaining momentum ``x =
+    p_link`` solves ``H = energy``. ``H = 1/2 p^T A p + V`` with ``A = M^-1``
+    is quadratic in ``x``: ``1/2 a x^2 + b x + c = 0`` with ``a = A_ii``,
+    ``b = sum_{j != i} A_ij p_j`` and ``c = H(x = 0) - energy``. Its roots give
+    ``theta_i' = dH/dp_i = a x + b = +-sqrt(b^2 - 2 a c)``, so the root with the
+    sign of ``direction`` crosses the surface in that direction. Points where
+    ``b^2 < 2 a c`` cannot reach the surface at this energy and are dropped.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        ``n >= 2``.
+    energy : float
+        Total energy [J] (zero potential at the pivot's height).
+    theta_rest, p_rest : array_like, shape (..., n - 1)
+        The angles and momenta other than ``theta_link``, ``p_link``, in
+        link order.
+    link : int
+        Which link's angle defines the surface (0-based).
+    value : float
+        The surface ``theta_link = value``.
+    direction : {1, -1}
+        Sign of ``theta_link'`` at the initial states.
+
+    Returns
+    -------
+    theta0, omega0 : ndarray, shape (K, n)
+        The ``K`` accessible points, flattened, ready for
+        :func:`poincare_section`.
+
+    Raises
+    ------
+    ValueError
+        If no point is accessible at this energy.
+
+    Examples
+    --------
+    >>> import numpy as np, pendulum_lab as pl
+    >>> dp = pl.double_pendulum()
+    >>> theta0, omega0 = section_states(dp, -15.0, [[0.0], [0.5]], [[0.0], [1.0]])
+    >>> bool(np.allclose(dp.energy(theta0, omega0), -15.0)), bool(np.all(omega0[:, 0] > 0))
+    (True, True)
+    """
+    check.pendulum_model(model)
+    n = model.n
+    if n < 2:
+        raise ValueError("`model` must have at least two links for a Poincare section")
+    energy = check.real_number("energy", energy)
+    link = check.index_below("link", link, n)
+    value = check.real_number("value", value)
+    direction = check_direction(direction, allow_both=False)
+    theta_rest = check.state_array("theta_rest", theta_rest, n - 1)
+    p_rest = check.state_array("p_rest", p_rest, n - 1)
+    theta_rest, p_rest = np.broadcast_arrays(theta_rest, p_rest)
+    theta = np.insert(theta_rest.reshape(-1, n - 1), link, value, axis=-1)
+    p = np.insert(p_rest.reshape(-1, n - 1), link, 0.0, axis=-1)
+    inverse = np.linalg.inv(model.mass_matrix_at(theta))
+    a = inverse[:, link, link]
+    b = np.einsum("kj,kj->k", inverse[:, link, :], p)
+    c = model.hamiltonian_value(theta, p) - energy
+    disc = b**2 - 2 * a * c
+    ok = disc >= 0
+    if not np.any(ok):
+        raise ValueError(
+            f"no point reaches the surface at `energy` = {energy} J: it is below "
+            "the potential energy there"
+        )
+    p[ok, link] = (-b[ok] + direction * np.sqrt(disc[ok])) / a[ok]
+    return theta[ok], model.velocities(theta[ok], p[ok])
+
+
+@dataclass(frozen=True)
+class PoincareSection:
+    """Crossings of the surface ``theta_link = value (mod 2 pi)``.
+
+    Attributes
+    ----------
+    t : ndarray, shape (C,)
+        Crossing times [s].
+    theta : ndarray, shape (C, n)
+        Angles at the crossings, wrapped to ``(-pi, pi]``.
+    p : ndarray, shape (C, n)
+        Momenta at the crossings.
+    orbit : ndarray of int, shape (C,)
+        Which initial state (flat index into the ensemble) each crossing
+        belongs to.
+    residual : ndarray, shape (C,)
+        ``|theta_link - (value + 2 pi m)|`` at each located crossing: how far
+        it lies from the surface.
+    link, value, direction
+        The surface and the crossing direction (``1``: ``theta_link``
+        increasing, ``-1``: decreasing, ``0``: both).
+    refined : bool
+        True if crossings were located on the surface, False if they are the
+        nearest saved steps.
+    """
+
+    t: np.ndarray
+    theta: np.ndarray
+    p: np.ndarray
+    orbit: np.ndarray
+    residual: np.ndarray
+    link: int
+    value: float
+    direction: int
+    refined: bool
+
+    def shown_link(self, link: int | None = None) -> int:
+        """``link``, or by default the first link off the surface."""
+        return (1 if self.link == 0 else 0) if link is None else link
+
+    def coordinates(self, link: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(theta_j, p_j)`` of the crossings for link ``j`` (the first one off the surface)."""
+        link = self.shown_link(link)
+        return self.theta[:, link], self.p[:, link]
+
+    def plot(self, ax=None, link: int | None = None, s: float = 2.0, **kwargs):
+        """The section in ``(theta_j, p_j)``, one colour per orbit; returns the Figure."""
+        from ..plotting import plot_section
+
+        return plot_section(self, ax=ax, link=link, s=s, **kwargs)
+
+
+
+def poincare_section(
+    model: PendulumModel,
+    theta0,
+    omega0=None,
+    *,
+    t_end: float,
+    dt: float = 0.01,
+    method="glrk4",
+    p0=None,
+    link: int = 0,
+    value: float = 0.0,
+    direction: int = 1,
+    refine: bool = True,
+    progress: bool | None = None,
+) -> PoincareSection:
+    """Crossings of ``theta_link = value (mod 2 pi)`` located to round-off.
+
+    The ensemble runs in segments (:func:`~pendulum_lab.simulate_segments`)
+    with every step kept; a crossing is a step over which the unwrapped angle
+    passes ``value + 2 pi m``, upwards for ``direction = 1``
+    (:func:`pendulum_lab.events.find_crossings` with period ``2 pi``). For
+    each crossing between steps ``k`` and ``k+1``:
+
+    1. the cubic Hermite interpolant of ``theta_link`` (values and slopes
+       ``dH/dp_link`` at both steps) gives a first guess ``tau`` of the
+       crossing time after ``t_k``;
+    2. Newton's method on ``tau``, each iterate being one step of length
+       ``tau`` of the same integrator from step ``k`` (:func:`~pendulum_lab.step`),
+       drives ``theta_link`` onto the surface to round-off
+       (:func:`pendulum_lab.events.land`).
+
+    The result is Henon's idea (land exactly on the surface with one extra
+    step of the integrator) done by a root solve in time instead of a change
+    of independent variable, so no new vector field is needed. With
+    ``refine=False`` the nearest saved step is returned instead (off the
+    surface by up to ``dt |theta_link'| / 2``: a negative control).
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0, p0 : array_like, shape (..., n)
+        Initial states (for example from :func:`section_states`).
+    t_end, dt, method
+        As for :func:`~pendulum_lab.simulate`.
+    link : int
+        The link whose angle defines the surface (0-based).
+    value : float
+        Surface ``theta_link = value``.
+    direction : {1, -1, 0}
+        ``1``: crossings with ``theta_link`` increasing (``dH/dp_link > 0``),
+        ``-1``: decreasing, ``0``: both.
+    refine : bool
+        Locate each crossing on the surface (default) or return the nearest step.
+    progress : bool, optional
+
+    Returns
+    -------
+    PoincareSection
+        Crossings sorted by orbit, then time.
+
+    Notes
+    -----
+    For the double pendulum the section ``theta_1 = 0`` is often described
+    with ``p_1 > 0``; the crossing direction is the sign of
+    ``theta_1' = (M^-1 p)_1``, which is not always the sign of ``p_1``. The
+    direction used here is that of ``theta_1'``: it makes the section a
+    one-sided surface crossed transversally, on which the return map
+    preserves area in ``(theta_2, p_2)``.
+
+    References
+    ----------
+    M. Henon, Physica D 5 (1982) 412-414.
+
+    Examples
+    --------
+    >>> import numpy as np, pendulum_lab as pl
+    >>> dp = pl.double_pendulum()
+    >>> theta0, omega0 = section_states(dp, -20.0, [[0.3]], [[0.0]])
+    >>> sec = poincare_section(dp, theta0, omega0, t_end=5.0, method="rk4")
+    >>> bool(np.all(sec.residual < 1e-10)), len(sec.t) > 0
+    (True, True)
+    """
+    check.pendulum_model(model)
+    n = model.n
+    link = check.index_below("link", link, n)
+    value = check.real_number("value", value)
+    direction = check_direction(direction)
+    run = simulate_segments(model, theta0, omega0, t_end=t_end, dt=dt, method=method, p0=p0,
+                            progress=progress, label="Poincare section")
+    found = {name: [] for name in ("t", "theta", "p", "orbit", "residual")}
+    for segment in run:
+        require_finite(segment, "poincare_section")
+        _crossings(model, segment, link, value, direction, refine, found)
+    arrays = {k: np.asarray(v) for k, v in found.items()}
+    if arrays["t"].size == 0:
+        arrays = {
+            "t": np.empty(0),
+            "theta": np.empty((0, n)),
+            "p": np.empty((0, n)),
+            "orbit": np.empty(0, dtype=int),
+            "residual": np.empty(0),
+        }
+    order = np.lexsort((arrays["t"], arrays["orbit"]))
+    return PoincareSection(
+        t=arrays["t"][order],
+        theta=wrap_angle(arrays["theta"][order]),
+        p=arrays["p"][order],
+        orbit=arrays["orbit"][order].astype(int),
+        residual=arrays["residual"][order],
+        link=link,
+        value=value,
+        direction=direction,
+        refined=bool(refine),
+    )
+
+
+def _crossings(model, segment, link, value, direction, refine, found):
+    """Append the crossings in one segment (``theta`` of shape ``(L+1, K, n)``) to ``found``."""
+    hits = find_crossings(segment.theta[..., link], direction, level=value, period=2 * np.pi)
+    if len(hits) == 0:
+        return
+    steps, orbits = hits.step, hits.member
+    if not refine:
+        k, residual = hits.nearest()
+        found["t"].extend(segment.t[k])
+        found["theta"].extend(segment.theta[k, orbits])
+        found["p"].extend(segment.p[k, orbits])
+        found["orbit"].extend(orbits)
+        found["residual"].extend(residual)
+        return
+    dt = segment.dt
+    guess = hits.fraction(dt * segment.omega[steps, orbits, link],
+                          dt * segment.omega[steps + 1, orbits, link])
+    for k, j, s, target in zip(steps, orbits, guess, hits.level):
+        theta, p = segment.theta[k, j], segment.p[k, j]
+        t_k = float(segment.t[k])
+
+        def advance(tau, theta=theta, p=p, t_k=t_k):
+            if tau == 0.0:
+                return theta, p
+            return step(model, theta, p0=p, dt=tau, method=segment.method, t0=t_k)
+
+        miss, (q, p_landed), tau = land(
+            advance,
+            lambda state, target=target: state[0][link] - target,
+            lambda state: model.dH_dp(*state)[link],
+            float(s * dt),
+            (-dt, 2 * dt),
+            scale=target,
+        )
+        found["t"].append(segment.t[k] + tau)
+        found["theta"].append(q)
+        found["p"].append(p_landed)
+        found["orbit"].append(j)
+        found["residual"].append(miss)
+
+
+def energy_sections(
+    model: PendulumModel,
+    energies,
+    *,
+    orbits: int = 10,
+    t_end: float = 100.0,
+    dt: float = 0.01,
+    method="glrk4",
+    progress: bool | None = None,
+) -> dict[float, PoincareSection]:
+    """Poincare sections ``theta_1 = 0``, ``theta_1' > 0`` of a double pendulum, several energies.
+
+    For each energy, ``orbits`` initial states are spread over the section:
+    half along ``p_2 = 0`` at ``theta_2`` between 0 and the largest accessible
+    angle, half along ``theta_2 = 0`` at ``p_2 > 0`` up to the largest
+    accessible momentum (all via :func:`section_states`). All orbits of all
+    energies run as one ensemble.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A double pendulum.
+    energies : sequence of float
+        Energies [J], above the minimum ``V(0, 0)``.
+    orbits : int
+        Initial states per energy, ``>= 2``.
+    t_end, dt, method, progress
+        As for :func:`poincare_section`.
+
+    Returns
+    -------
+    dict
+        ``{energy: PoincareSection}``; each section's ``orbit`` numbers its
+        own orbits from 0.
+    """
+    check.pendulum_model(model)
+    if model.n != 2:
+        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    orbits = check.integer_at_least("orbits", orbits, 2)
+    energies = [check.real_number("energies", e) for e in np.atleast_1d(energies)]
+    starts, owner = [], []
+    for number, energy in enumerate(energies):
+        theta0, omega0 = _spread_on_section(model, energy, orbits)
+        starts.append((theta0, omega0))
+        owner += [number] * len(theta0)
+    theta0 = np.concatenate([s[0] for s in starts])
+    omega0 = np.concatenate([s[1] for s in starts])
+    sec = poincare_section(model, theta0, omega0, t_end=t_end, dt=dt, method=method,
+                           progress=progress)
+    owner = np.asarray(owner)
+    first = np.cumsum([0] + [len(s[0]) for s in starts])
+    result = {}
+    for number, energy in enumerate(energies):
+        keep = owner[sec.orbit] == number
+        result[energy] = PoincareSection(
+            t=sec.t[keep],
+            theta=sec.theta[keep],
+            p=sec.p[keep],
+            orbit=sec.orbit[keep] - first[number],
+            residual=sec.residual[keep],
+            link=sec.link,
+            value=sec.value,
+            direction=sec.direction,
+            refined=sec.refined,
+        )
+    return result
+
+
+def _spread_on_section(model, energy, orbits):
+    """``orbits`` states on ``theta_1 = 0`` at ``energy``, spread along two lines."""
+    along_theta = orbits - orbits // 2
+    grid = np.linspace(0.0, np.pi, 400)
+    bottom = model.potential_energy(np.column_stack([np.zeros_like(grid), grid]))
+    reach = grid[bottom < energy]
+    if reach.size == 0:
+        raise ValueError(
+            f"`energies` must lie above the minimum of the potential energy "
+            f"({float(bottom[0]):.6g} J), got {energy}"
+        )
+    theta2 = np.linspace(0.0, reach[-1], along_theta + 1)[:-1] + reach[-1] / (2 * along_theta)
+    # Largest p_2 on theta = 0: the discriminant of the quadratic for p_1 vanishes.
+    inverse = np.linalg.inv(model.mass_matrix_at(np.zeros(2)))
+    depth = energy - float(model.potential_energy(np.zeros(2)))
+    p2_max = np.sqrt(2 * depth / (inverse[1, 1] - inverse[0, 1] ** 2 / inverse[0, 0]))
+    count = orbits // 2
+    p2 = (np.arange(count) + 0.5) / count * p2_max
+    theta_rest = np.concatenate([theta2, np.zeros(count)])[:, None]
+    p_rest = np.concatenate([np.zeros(along_theta), p2])[:, None]
+    return section_states(model, energy, theta_rest, p_rest)

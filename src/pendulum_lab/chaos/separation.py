@@ -1,0 +1,110 @@
+"""Sensitivity to initial conditions: two trajectories that start close."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import _validation as check
+from ..model import PendulumModel
+from ..simulate import Trajectory, canonical_state, simulate
+from ._common import phase_distance, unit_direction
+
+__all__ = ["Separation", "perturbed", "separation"]
+
+
+@dataclass(frozen=True)
+class Separation:
+    """Phase-space distance between a trajectory and a slightly perturbed copy.
+
+    Attributes
+    ----------
+    t : ndarray, shape (S,)
+    distance : ndarray, shape (S, ...)
+        Euclidean distance in ``(theta, p)``, angle differences wrapped to
+        ``(-pi, pi]`` (so it saturates at the size of the accessible region).
+    delta : float
+        Initial distance.
+    trajectory : Trajectory
+        Both runs, the reference first: ``theta`` of shape ``(S, 2, ..., n)``.
+    """
+
+    t: np.ndarray
+    distance: np.ndarray
+    delta: float
+    trajectory: Trajectory
+
+    def plot(self, ax=None, label=None, **kwargs):
+        """Distance against time on a log scale; returns the Figure."""
+        from ..plotting import plot_separation
+
+        return plot_separation(self, ax=ax, label=label, **kwargs)
+
+
+def perturbed(theta, p, delta: float, seed) -> tuple[np.ndarray, np.ndarray]:
+    """``(theta, p)`` moved by ``delta`` along a random unit direction fixed by ``seed``.
+
+    The direction is one vector of length ``2n`` in ``(theta, p)``, the same
+    for every state of a batch.
+    """
+    n = np.shape(theta)[-1]
+    u = unit_direction(2 * n, seed)
+    return theta + delta * u[:n], p + delta * u[n:]
+
+
+def separation(
+    model: PendulumModel,
+    theta0,
+    omega0=None,
+    *,
+    t_end: float,
+    dt: float = 0.01,
+    method="glrk4",
+    save_every: int = 1,
+    p0=None,
+    delta: float = 1e-9,
+    seed=0,
+    progress: bool | None = None,
+) -> Separation:
+    """Distance versus time between two trajectories that start ``delta`` apart.
+
+    The perturbation has length ``delta`` in ``(theta, p)`` along a random
+    direction fixed by ``seed``. Both runs are one ensemble of two members.
+    On a chaotic orbit the distance grows like ``delta exp(lambda t)`` (a
+    straight line on a log scale, slope the largest Lyapunov exponent) until
+    it saturates; on a regular orbit it grows at most linearly.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0, p0 : array_like, shape (..., n)
+        The initial state, as for :func:`~pendulum_lab.simulate`.
+    t_end, dt, method, save_every, progress
+        As for :func:`~pendulum_lab.simulate`.
+    delta : float
+        Initial distance, ``> 0``.
+    seed : int or None
+        Seed of the perturbation direction.
+
+    Returns
+    -------
+    Separation
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> sep = separation(pl.double_pendulum(), [2.0, 2.5], [0.0, 0.0], t_end=5.0,
+    ...                  method="rk4")
+    >>> bool(sep.distance[-1] > 100 * sep.delta)
+    True
+    """
+    theta0, p0 = canonical_state(model, theta0, omega0, p0)
+    delta = check.positive_number("delta", delta)
+    theta1, p1 = perturbed(theta0, p0, delta, seed)
+    traj = simulate(model, np.stack([theta0, theta1]), p0=np.stack([p0, p1]), t_end=t_end,
+                    dt=dt, method=method, save_every=save_every, progress=progress)
+    distance = phase_distance(
+        traj.theta[:, 0], traj.p[:, 0], traj.theta[:, 1], traj.p[:, 1], wrap=True
+    )
+    return Separation(traj.t, distance, delta, traj)

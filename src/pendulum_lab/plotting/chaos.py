@@ -1,0 +1,188 @@
+"""Figures of the chaos measurements: separation, Lyapunov exponents, sections, flip map.
+
+Each result of :mod:`pendulum_lab.chaos` has a ``plot`` method that calls the
+function here.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.axes import Axes
+from matplotlib.colors import ListedColormap, LogNorm
+from matplotlib.figure import Figure
+
+from .. import _validation as check
+from .figures import get_axes, new_figure
+
+__all__ = [
+    "plot_flip_map",
+    "plot_lyapunov",
+    "plot_parting",
+    "plot_section",
+    "plot_sections",
+    "plot_separation",
+    "plot_small_angle",
+]
+
+
+def plot_separation(sep, ax: Axes | None = None, label=None, **kwargs) -> Figure:
+    """Distance against time on a log scale, for a :class:`~pendulum_lab.chaos.Separation`."""
+    ax = get_axes(ax)
+    ax.semilogy(sep.t, sep.distance, label=label, **kwargs)
+    ax.set(xlabel="t (s)", ylabel="distance in (theta, p)")
+    if label is not None:
+        ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_lyapunov(estimate, ax: Axes | None = None, label=None, **kwargs) -> Figure:
+    """Running estimate of a :class:`~pendulum_lab.chaos.LyapunovEstimate` (log time axis).
+
+    For an ensemble, one line per member.
+    """
+    ax = get_axes(ax)
+    if label is None:
+        label = f"{estimate.approach}, {estimate.method}"
+    lines = ax.semilogx(estimate.t, estimate.running.reshape(len(estimate.t), -1), **kwargs)
+    lines[0].set_label(label)
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set(xlabel="t (s)", ylabel="running estimate of lambda_1 (1/s)")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_section(section, ax: Axes | None = None, link: int | None = None, s: float = 2.0,
+                 **kwargs) -> Figure:
+    """A :class:`~pendulum_lab.chaos.PoincareSection` in ``(theta_j, p_j)``, one colour per orbit.
+
+    ``link`` is ``j``, by default the first link off the surface.
+    """
+    ax = get_axes(ax, width=4.8, height=4.2)
+    x, y = section.coordinates(link)
+    link = section.shown_link(link)
+    ax.scatter(
+        x, y, c=section.orbit % 20, s=s, cmap="tab20", vmin=0, vmax=19, linewidths=0, **kwargs
+    )
+    ax.set(xlabel=f"theta{link + 1} (rad)", ylabel=f"p{link + 1} (kg m^2/s)")
+    return ax.figure
+
+
+def plot_sections(sections: dict, ncols: int = 2) -> Figure:
+    """Poincare sections side by side, one panel per energy; returns the Figure.
+
+    Parameters
+    ----------
+    sections : dict
+        ``{energy: PoincareSection}``, as from :func:`pendulum_lab.chaos.energy_sections`.
+    ncols : int
+        Panels per row.
+    """
+    ncols = check.integer_at_least("ncols", ncols, 1)
+    count = len(sections)
+    if count == 0:
+        raise ValueError("`sections` must hold at least one section")
+    ncols = min(ncols, count)
+    nrows = math.ceil(count / ncols)
+    fig, axes = new_figure(nrows, ncols, width=4.0 * ncols, height=3.6)
+    axes = np.asarray(axes).reshape(-1)
+    for ax, (energy, sec) in zip(axes, sections.items()):
+        sec.plot(ax=ax)
+        ax.set_title(f"E = {energy:g} J, {len(sec.t)} crossings", fontsize="medium")
+    for ax in axes[count:]:
+        ax.set_visible(False)
+    return fig
+
+
+def plot_flip_map(flip_map, ax: Axes | None = None, colorbar: bool = True) -> Figure:
+    """A :class:`~pendulum_lab.chaos.FlipMap` with a logarithmic colour scale.
+
+    Energy-forbidden cells are grey, cells that did not flip before
+    ``t_end`` white.
+    """
+    ax = get_axes(ax, width=5.4, height=4.4)
+    half1 = (flip_map.theta1[1] - flip_map.theta1[0]) / 2 if flip_map.theta1.size > 1 else 0.5
+    half2 = (flip_map.theta2[1] - flip_map.theta2[0]) / 2 if flip_map.theta2.size > 1 else 0.5
+    extent = (
+        flip_map.theta1[0] - half1,
+        flip_map.theta1[-1] + half1,
+        flip_map.theta2[0] - half2,
+        flip_map.theta2[-1] + half2,
+    )
+    flipped = np.ma.masked_invalid(np.where(np.isfinite(flip_map.time), flip_map.time, np.nan))
+    lowest = float(flipped.min()) if flipped.count() else flip_map.dt
+    lowest = min(max(lowest, flip_map.dt), flip_map.t_end / 10)
+    image = ax.imshow(
+        flipped,
+        origin="lower",
+        extent=extent,
+        interpolation="nearest",
+        cmap=colormaps["viridis"].with_extremes(bad="white"),
+        norm=LogNorm(vmin=lowest, vmax=flip_map.t_end),
+    )
+    ax.imshow(
+        np.ma.masked_where(~flip_map.forbidden, flip_map.forbidden.astype(float)),
+        origin="lower",
+        extent=extent,
+        interpolation="nearest",
+        cmap=ListedColormap(["0.75"]),
+        vmin=0,
+        vmax=1,
+    )
+    ax.set(xlabel="theta1(0) (rad)", ylabel="theta2(0) (rad)")
+    if colorbar:
+        ax.figure.colorbar(image, ax=ax, label="flip time (s)")
+    return ax.figure
+
+
+def plot_small_angle(comparison, ax: Axes | None = None, member=()) -> Figure:
+    """Both motions of one member of a :class:`~pendulum_lab.chaos.SmallAngleComparison`."""
+    ax = get_axes(ax, width=7.0, height=3.6)
+    member = (member,) if np.ndim(member) == 0 and member != () else tuple(member)
+    full = comparison.theta_full[(slice(None), *member)]
+    linear = comparison.theta_linear[(slice(None), *member)]
+    for i in range(full.shape[-1]):
+        line = ax.plot(comparison.t, full[:, i], label=f"theta{i + 1} full")[0]
+        ax.plot(comparison.t, linear[:, i], "--", color=line.get_color(),
+                label=f"theta{i + 1} linearised")
+    parting = np.asarray(comparison.parting_time)[member]
+    if np.isfinite(parting):
+        ax.axvline(parting, color="k", lw=0.8, ls=":", label="they part")
+    ax.set(xlabel="t (s)", ylabel="angle (rad)")
+    ax.legend(fontsize="small", ncol=2)
+    return ax.figure
+
+
+def plot_parting(comparison, amplitudes, ax: Axes | None = None) -> Figure:
+    """Parting time against release amplitude (log-log) with a fitted power law.
+
+    Parameters
+    ----------
+    comparison : SmallAngleComparison
+    amplitudes : array_like, shape like ``comparison.parting_time``
+        The size of each member's release (for example its largest angle).
+    """
+    amplitudes = np.asarray(amplitudes, dtype=float)
+    times = np.asarray(comparison.parting_time, dtype=float)
+    if amplitudes.shape != times.shape:
+        raise ValueError(
+            f"`amplitudes` must have the shape of `parting_time` {times.shape}, "
+            f"got {amplitudes.shape}"
+        )
+    ax = get_axes(ax)
+    ax.loglog(amplitudes, times, "o", label="measured")
+    parted = np.isfinite(times) & (amplitudes > 0)
+    if parted.sum() >= 2:
+        slope, offset = np.polyfit(np.log(amplitudes[parted]), np.log(times[parted]), 1)
+        ax.loglog(
+            amplitudes[parted],
+            np.exp(offset) * amplitudes[parted] ** slope,
+            "--",
+            color="0.4",
+            label=f"fit: time ~ amplitude^{slope:.2f}",
+        )
+    ax.set(xlabel="release amplitude (rad)", ylabel="parting time (s)")
+    ax.legend(fontsize="small")
+    return ax.figure

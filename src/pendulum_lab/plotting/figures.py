@@ -1,0 +1,93 @@
+"""What every figure of the package shares: new figures, the axes helper, labels, colours.
+
+Figures are created without :mod:`matplotlib.pyplot`, so nothing accumulates
+in a global figure list; every ``plot_*`` function draws into ``ax`` when
+given one and otherwise makes a new figure (:func:`get_axes`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from .._angles import wrap_angle
+from ..simulate import Trajectory
+
+__all__ = [
+    "KINETIC",
+    "LIBRATION",
+    "POTENTIAL",
+    "ROTATION",
+    "SEPARATRIX",
+    "TOTAL",
+    "broken_at_wraps",
+    "get_axes",
+    "link_label",
+    "new_figure",
+    "single_trajectory",
+    "subscript",
+    "wrap_angle",
+]
+
+# Colours used for the same quantity everywhere.
+KINETIC, POTENTIAL, TOTAL = "tab:blue", "tab:orange", "black"
+LIBRATION, ROTATION, SEPARATRIX = "tab:blue", "tab:green", "tab:red"
+
+_SUBSCRIPTS = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+
+def new_figure(
+    nrows: int = 1, ncols: int = 1, *, width: float = 6.4, height: float = 3.6, **subplot_kw
+):
+    """A new Figure and its axes (as ``Figure.subplots`` returns them).
+
+    ``width`` is the whole figure's width and ``height`` that of one row, in
+    inches. The figure uses the constrained layout.
+    """
+    fig = Figure(figsize=(width, height * nrows), layout="constrained")
+    return fig, fig.subplots(nrows, ncols, squeeze=True, **subplot_kw)
+
+
+def get_axes(ax: Axes | None, **figure_kw) -> Axes:
+    """``ax`` (checked), or the axes of a :func:`new_figure` with ``figure_kw``."""
+    if ax is None:
+        return new_figure(**figure_kw)[1]
+    if not isinstance(ax, Axes):
+        raise TypeError(f"`ax` must be a matplotlib Axes or None, got {type(ax).__name__}")
+    return ax
+
+
+def single_trajectory(traj: Trajectory) -> Trajectory:
+    """``traj`` if it is one trajectory (not an ensemble), else a clear error."""
+    if not isinstance(traj, Trajectory):
+        raise TypeError(
+            f"`traj` must be a Trajectory (from pl.simulate), got {type(traj).__name__}"
+        )
+    if traj.theta.ndim != 2:
+        raise ValueError(
+            "`traj` must be a single trajectory (angles of shape (N+1, n)); for an ensemble "
+            f"plot one member, got angles of shape {traj.theta.shape}"
+        )
+    return traj
+
+
+def link_label(i: int, n: int) -> str:
+    """The subscript of link ``i`` (0-based) of ``n``: ``"₂"``, or nothing for one link.
+
+    Unicode subscripts, not mathtext: mathtext costs milliseconds per label
+    on every redraw of a live explorer.
+    """
+    return "" if n == 1 else subscript(i + 1)
+
+
+def subscript(number: int) -> str:
+    """``12`` as ``"₁₂"``."""
+    return str(number).translate(_SUBSCRIPTS)
+
+
+def broken_at_wraps(theta: np.ndarray, other: np.ndarray):
+    """Wrapped ``theta`` and ``other`` with NaN inserted where the angle jumps by 2 pi."""
+    wrapped = wrap_angle(theta)
+    jumps = np.nonzero(np.abs(np.diff(wrapped)) > np.pi)[0] + 1
+    return (np.insert(wrapped, jumps, np.nan), np.insert(np.asarray(other, float), jumps, np.nan))

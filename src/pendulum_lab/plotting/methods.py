@@ -1,0 +1,156 @@
+"""Figures that compare integrators: observed order, energy error growth, work-precision."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from .. import _validation as check
+from ..analysis import EnergyComparison, OrderResult, ReferenceRun
+from .figures import get_axes
+
+__all__ = [
+    "plot_energy_comparison",
+    "plot_energy_error_growth",
+    "plot_order",
+    "plot_work_precision",
+]
+
+
+def _run_label(run) -> str:
+    if isinstance(run, ReferenceRun):
+        return f"DOP853, rtol = {run.rtol:g}"
+    return run.method.name
+
+
+def plot_energy_error_growth(runs, ax: Axes | None = None, labels=None) -> Figure:
+    """The largest energy error so far, ``max_{s <= t} |E(s) - E(0)|``, on a log scale.
+
+    The running maximum is flat once a bounded error has reached its bound
+    and keeps rising for a drifting one; the raw error oscillates too fast to
+    read over a long run. The course report's velocity-variable methods are
+    dashed, DOP853 dotted.
+
+    Parameters
+    ----------
+    runs : sequence of Trajectory or ReferenceRun
+        Single trajectories.
+    ax : Axes, optional
+    labels : sequence of str, optional
+        Legend entries; by default the method names.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    ax = get_axes(ax, width=8.0, height=4.2)
+    labels = [_run_label(run) for run in runs] if labels is None else list(labels)
+    if len(labels) != len(runs):
+        raise ValueError(f"`labels` must have one entry per run ({len(runs)}), got {len(labels)}")
+    for run, label in zip(runs, labels):
+        if np.ndim(run.energy_error) != 1:
+            raise ValueError("`runs` must be single trajectories, got an ensemble")
+        worst = np.maximum.accumulate(np.abs(run.energy_error[1:]))
+        if isinstance(run, ReferenceRun):
+            style = ":"
+        else:
+            style = "--" if run.method.variables == "velocity" else "-"
+        ax.plot(run.t[1:], np.where(worst > 0, worst, np.nan), style, lw=1.4, label=label)
+    ax.set_yscale("log")
+    ax.set(xlabel="t (s)", ylabel="largest |E(s) - E(0)| for s <= t (J)")
+    ax.legend(fontsize="small", ncols=2)
+    return ax.figure
+
+
+def plot_order(results, ax: Axes | None = None) -> Figure:
+    """Global error against step size (log-log) with each fitted slope.
+
+    Parameters
+    ----------
+    results : OrderResult or sequence of OrderResult
+        From :func:`pendulum_lab.analysis.observed_order`.
+    ax : Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Markers are the measured errors, dashed lines the least-squares fits
+        ``log(error) = slope log(dt) + c``; the legend gives each slope.
+    """
+    if isinstance(results, OrderResult):
+        results = [results]
+    ax = get_axes(ax, width=6.0, height=4.2)
+    for result in results:
+        slope, intercept = np.polyfit(np.log(result.dts), np.log(result.errors), 1)
+        line = ax.loglog(
+            result.dts, result.errors, "o", label=f"{result.method}: slope {slope:.2f}"
+        )[0]
+        ax.loglog(
+            result.dts, np.exp(intercept) * result.dts**slope, "--", lw=1, color=line.get_color()
+        )
+    ax.set(
+        xlabel="step size dt (s)",
+        ylabel="error at the final time",
+        title="Observed order of accuracy",
+    )
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) -> Figure:
+    """Energy error against cost, one line per method (a work-precision diagram).
+
+    Parameters
+    ----------
+    points : sequence of WorkPrecision
+    x : {"wall_time", "evaluations"}
+        The cost axis.
+    ax : Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Lower left is better: less error for less work.
+    """
+    x = check.choice("x", x, ("wall_time", "evaluations"))
+    ax = get_axes(ax, width=6.0, height=4.2)
+    for name in dict.fromkeys(point.method for point in points):
+        mine = [point for point in points if point.method == name and point.completed]
+        style = ":" if name == "DOP853" else "-"
+        ax.loglog(
+            [getattr(point, x) for point in mine],
+            [point.energy_error for point in mine],
+            "o" + style,
+            label=name,
+        )
+    ax.set(
+        xlabel="wall time (s)" if x == "wall_time" else "vector-field evaluations",
+        ylabel="max |E - E(0)| (J)",
+    )
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_energy_comparison(comparison: EnergyComparison, ax: Axes | None = None) -> Figure:
+    """``|E - E0| / |E0|`` against time, log scale, one line per method.
+
+    Exact zeros are not drawn (a log axis cannot show them).
+
+    Parameters
+    ----------
+    comparison : EnergyComparison
+        From :func:`pendulum_lab.analysis.compare_energy`.
+    ax : Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    ax = get_axes(ax, width=7.0, height=3.6)
+    for name, traj in comparison.trajectories.items():
+        err = np.abs(traj.relative_energy_error)
+        ax.semilogy(traj.t, np.where(err > 0, err, np.nan), label=name, lw=1)
+    ax.set(xlabel="t (s)", ylabel="|E - E(0)| / |E(0)|")
+    ax.legend(fontsize="small")
+    return ax.figure

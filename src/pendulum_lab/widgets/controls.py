@@ -1,0 +1,214 @@
+"""The controls the explorers and the simulator share: sliders, dropdowns, their model.
+
+A public internal module: :mod:`pendulum_lab.widgets` and
+:mod:`pendulum_lab.animation` build their panels from these pieces, and a new
+instrument (a live simulator, say) should too. Control names are fixed:
+``theta1``, ..., ``omega1``, ..., ``m1``, ..., ``l1``, ..., ``g``, ``method``,
+``dt``, ``t_end`` (``theta``, ``omega``, ``mass``, ``length`` for one link).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import ipywidgets as widgets
+import numpy as np
+
+from .. import _validation as check
+from ..integrators import METHODS, get_method
+from ..model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from ..plotting import link_label
+from ..simulate import Trajectory, simulate, step_count
+
+__all__ = [
+    "DT_CHOICES",
+    "MAX_STEPS",
+    "check_steps",
+    "column",
+    "control_names",
+    "model_from_controls",
+    "parameter_controls",
+    "run_controls",
+    "simulate_controls",
+    "slider",
+    "start_state",
+    "state_controls",
+    "state_from_controls",
+]
+
+#: Step sizes offered by the ``dt`` slider [s] (a logarithmic ladder).
+DT_CHOICES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5)
+#: Largest number of steps one update may take (``t_end / dt``).
+MAX_STEPS = 100_000
+
+DESCRIPTION_WIDTH = "88px"
+SLIDER_WIDTH = "310px"
+
+
+def control_names(n: int) -> dict[str, list[str]]:
+    """Control names: ``theta``/``omega``/``mass``/``length`` for one link, else indexed."""
+    if n == 1:
+        return {"theta": ["theta"], "omega": ["omega"], "mass": ["mass"], "length": ["length"]}
+    idx = range(1, n + 1)
+    return {
+        "theta": [f"theta{i}" for i in idx],
+        "omega": [f"omega{i}" for i in idx],
+        "mass": [f"m{i}" for i in idx],
+        "length": [f"l{i}" for i in idx],
+    }
+
+
+def slider(
+    value: float, low: float, high: float, step: float, description: str, fmt: str = ".2f"
+) -> widgets.FloatSlider:
+    """A float slider whose range always contains ``value``; the unit is in the description."""
+    return widgets.FloatSlider(
+        value=value,
+        min=min(low, value),
+        max=max(high, value),
+        step=step,
+        description=description,
+        readout_format=fmt,
+        continuous_update=False,
+        style={"description_width": DESCRIPTION_WIDTH},
+        layout=widgets.Layout(width=SLIDER_WIDTH),
+    )
+
+
+def state_controls(
+    n: int,
+    theta0,
+    omega0,
+    *,
+    angle_range=(-np.pi, np.pi),
+    speed_range=(-10, 10),
+    angle_step=0.01,
+    speed_step=0.05,
+    prefix: str = "",
+) -> dict:
+    """Sliders ``theta*`` [rad] and ``omega*`` [rad/s] for the initial state (or its offsets)."""
+    keys = control_names(n)
+    controls = {}
+    for i, key in enumerate(keys["theta"]):
+        controls[key] = slider(
+            float(theta0[i]), *angle_range, angle_step, f"{prefix}θ{link_label(i, n)} (rad)", ".3f"
+        )
+    for i, key in enumerate(keys["omega"]):
+        controls[key] = slider(
+            float(omega0[i]),
+            *speed_range,
+            speed_step,
+            f"{prefix}ω{link_label(i, n)} (rad/s)",
+            ".2f",
+        )
+    return controls
+
+
+def parameter_controls(model: PendulumModel) -> dict:
+    """Sliders for masses [kg], lengths [m] and g [m/s^2], starting at the model's values."""
+    n, keys = model.n, control_names(model.n)
+    controls = {}
+    for i, key in enumerate(keys["mass"]):
+        controls[key] = slider(model.masses[i], 0.1, 5.0, 0.05, f"m{link_label(i, n)} (kg)")
+    for i, key in enumerate(keys["length"]):
+        controls[key] = slider(model.lengths[i], 0.1, 3.0, 0.05, f"l{link_label(i, n)} (m)")
+    controls["g"] = slider(model.g, 0.5, 25.0, 0.01, "g (m/s²)")
+    return controls
+
+
+def run_controls(method, t_end: float, dt: float, t_end_range=(0.1, 100.0)) -> dict:
+    """The method dropdown, a ``dt`` ladder slider [s] and a ``t_end`` slider [s]."""
+    name = get_method(method).name
+    choices = sorted(set(DT_CHOICES) | {float(dt)})
+    return {
+        "method": widgets.Dropdown(
+            options=list(METHODS),
+            value=name,
+            description="method",
+            style={"description_width": DESCRIPTION_WIDTH},
+            layout=widgets.Layout(width=SLIDER_WIDTH),
+        ),
+        "dt": widgets.SelectionSlider(
+            options=[(f"{v:g}", v) for v in choices],
+            value=float(dt),
+            description="Δt (s)",
+            continuous_update=False,
+            style={"description_width": DESCRIPTION_WIDTH},
+            layout=widgets.Layout(width=SLIDER_WIDTH),
+        ),
+        "t_end": slider(float(t_end), *t_end_range, 0.1, "t_end (s)", ".1f"),
+    }
+
+
+def model_from_controls(n: int, controls: dict) -> PendulumModel:
+    """Build the model the parameter controls describe (cheap: compiled code is shared per n)."""
+    keys = control_names(n)
+    masses = [controls[k].value for k in keys["mass"]]
+    lengths = [controls[k].value for k in keys["length"]]
+    g = controls["g"].value
+    if n == 1:
+        return simple_pendulum(mass=masses[0], length=lengths[0], g=g)
+    if n == 2:
+        return double_pendulum(m1=masses[0], m2=masses[1], l1=lengths[0], l2=lengths[1], g=g)
+    return n_pendulum(n, masses=masses, lengths=lengths, g=g)
+
+
+def state_from_controls(n: int, controls: dict) -> tuple[np.ndarray, np.ndarray]:
+    keys = control_names(n)
+    return (
+        np.array([controls[k].value for k in keys["theta"]], dtype=float),
+        np.array([controls[k].value for k in keys["omega"]], dtype=float),
+    )
+
+
+def check_steps(t_end: float, dt: float) -> int:
+    """The steps a run of the controls takes, at most :data:`MAX_STEPS`."""
+    steps = step_count(t_end, dt)
+    if steps > MAX_STEPS:
+        raise ValueError(
+            f"t_end / dt = {t_end:g} s / {dt:g} s = {steps} steps, more than the explorer's "
+            f"limit of {MAX_STEPS}; choose a larger dt or a shorter t_end"
+        )
+    return steps
+
+
+def column(title: str, controls: Sequence[widgets.Widget]) -> widgets.VBox:
+    return widgets.VBox([widgets.HTML(f"<b>{title}</b>"), *controls])
+
+
+def start_state(n: int, theta0=None, omega0=None) -> tuple[np.ndarray, np.ndarray]:
+    """The explorers' starting state: the given one checked, or the default.
+
+    The default is at rest from 1 rad (one link) or from angles spread over
+    2.0-2.5 rad (a lively, chaotic release). Angles must lie in [-pi, pi] and
+    velocities in [-10, 10] rad/s, the range of the sliders.
+    """
+    default = [1.0] if n == 1 else np.linspace(2.0, 2.5, n)
+    theta0 = check.state_vector("theta0", default if theta0 is None else theta0, n, np.pi, "rad")
+    omega0 = check.state_vector("omega0", np.zeros(n) if omega0 is None else omega0, n, 10.0,
+                                "rad/s")
+    return theta0, omega0
+
+
+def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumModel, Trajectory]:
+    """The model and the trajectory that a set of explorer controls describes.
+
+    Parameters
+    ----------
+    n : int
+        Number of links.
+    controls : dict
+        Name -> widget, with the initial-state, parameter, ``dt``, ``t_end``
+        and ``method`` controls of :func:`explore`.
+    origin : callable ``model -> angles``, optional
+        If given, the angle controls are offsets from these angles.
+    """
+    c = controls
+    check_steps(c["t_end"].value, c["dt"].value)
+    model = model_from_controls(n, c)
+    theta0, omega0 = state_from_controls(n, c)
+    if origin is not None:
+        theta0 = theta0 + origin(model)
+    traj = simulate(model, theta0, omega0, t_end=c["t_end"].value, dt=c["dt"].value,
+                    method=c["method"].value, progress=False)
+    return model, traj

@@ -1,0 +1,202 @@
+"""The segment driver and the event locator: each checked against a known answer.
+
+Every property has a negative control: a case where the same check must fail.
+"""
+
+import numpy as np
+import pytest
+
+import pendulum_lab as pl
+from pendulum_lab import events
+
+DP = pl.double_pendulum()
+SP = pl.simple_pendulum()
+CHAOTIC = np.array([2.0, 2.5])  # at rest: round-off grows by e^(t / 0.6 s) here
+
+
+# --------------------------------------------------------------------------- the step-count rule
+def test_step_count_forgives_only_round_off():
+    assert pl.step_count(0.3, 0.1) == 3  # 0.3 / 0.1 = 2.9999999999999996
+    assert pl.step_count(1.0, 0.3) == 3
+    assert pl.step_count(30.005, 0.01) == 3000
+    # negative control: a genuine shortfall of one part in 1e9 is not forgiven
+    assert pl.step_count(0.3 * (1 - 1e-9), 0.1) == 2
+    traj = pl.simulate(SP, [1.0], [0.0], t_end=0.3, dt=0.1, method="rk4")
+    assert len(traj.t) == pl.step_count(0.3, 0.1) + 1
+
+
+# --------------------------------------------------------------------------- segments
+@pytest.mark.parametrize("method", ["glrk4", "rk4", "leapfrog_velocity"])
+def test_a_segmented_run_is_the_same_run_to_the_last_bit(method):
+    theta0 = np.stack([CHAOTIC, [0.3, -0.2]])
+    whole = pl.simulate(DP, theta0, np.zeros_like(theta0), t_end=20.0, dt=0.01, method=method,
+                        save_every=5)
+    run = pl.simulate_segments(DP, theta0, np.zeros_like(theta0), t_end=20.0, dt=0.01,
+                               method=method, save_every=5, segment_steps=35)
+    pieces = list(run)
+    assert len(pieces) == 58 and run.done == 2000  # 57 segments of 35 steps, one of 5
+    for a, b in zip(pieces[:-1], pieces[1:]):
+        assert np.array_equal(a.theta[-1], b.theta[0]) and a.t[-1] == pytest.approx(b.t[0])
+    theta = np.concatenate([pieces[0].theta] + [p.theta[1:] for p in pieces[1:]])
+    t = np.concatenate([pieces[0].t] + [p.t[1:] for p in pieces[1:]])
+    assert np.array_equal(theta, whole.theta)
+    assert np.allclose(t, whole.t, rtol=0, atol=1e-12)
+    # Negative control: restarting from angular velocities, as the chaotic runs did before,
+    # adds a rounding at each restart that the chaotic member amplifies far above round-off.
+    q, w, chained = theta0, np.zeros_like(theta0), [theta0]
+    for _ in range(40):
+        seg = pl.simulate(DP, q, w, t_end=0.5, dt=0.01, method="glrk4")
+        q, w = seg.theta[-1], seg.omega[-1]
+        chained.append(q)
+    exact = pl.simulate(DP, theta0, np.zeros_like(theta0), t_end=20.0, dt=0.01, method="glrk4")
+    assert np.max(np.abs(chained[-1][0] - exact.theta[-1][0])) > 1e-9
+
+
+def test_segments_carry_the_start_time():
+    run = pl.simulate_segments(SP, [1.0], [0.0], t_end=1.0, dt=0.1, method="rk4", t0=5.0,
+                               segment_steps=4)
+    starts = [float(seg.t[0]) for seg in run]
+    assert np.allclose(starts, [5.0, 5.4, 5.8]) and run.time == pytest.approx(6.0)
+    # the start time shifts the clock, not the motion (the pendulum is autonomous)
+    late = pl.simulate(SP, [1.0], [0.0], t_end=1.0, dt=0.1, method="rk4", t0=5.0)
+    early = pl.simulate(SP, [1.0], [0.0], t_end=1.0, dt=0.1, method="rk4")
+    assert np.array_equal(late.theta, early.theta)
+    assert np.allclose(late.t - early.t, 5.0) and not np.allclose(late.t, early.t)
+    with pytest.raises(ValueError, match="`t0`"):
+        pl.simulate(SP, [1.0], [0.0], t0=float("nan"))
+
+
+def test_members_can_leave_and_move_between_segments():
+    theta0 = np.array([[0.1, 0.0], [0.2, 0.0], [0.3, 0.0]])
+    run = pl.simulate_segments(DP, theta0, np.zeros_like(theta0), t_end=1.0, dt=0.01,
+                               method="rk4", segment_steps=50)
+    seen = []
+    for _segment in run:
+        seen.append(run.members.tolist())
+        if len(seen) == 1:
+            run.keep(np.array([True, False, True]))
+    assert seen == [[0, 1, 2], [0, 2]]
+    # restart moves only the chosen members; the others go on untouched
+    run = pl.simulate_segments(DP, theta0, np.zeros_like(theta0), t_end=1.0, dt=0.01,
+                               method="rk4", segment_steps=50)
+    first = next(iter(run))
+    run.restart([[0.0, 0.0]], [[0.0, 0.0]], where=[False, True, False])
+    second = next(iter(run))
+    assert np.array_equal(second.theta[0, 1], [0.0, 0.0]) and np.all(second.theta[:, 1] == 0)
+    assert np.array_equal(second.theta[0, [0, 2]], first.theta[-1, [0, 2]])
+    with pytest.raises(ValueError, match="`where`"):
+        run.restart([[0.0, 0.0]], [[0.0, 0.0]], where=[True, False])
+    with pytest.raises(ValueError, match="`segment_steps`"):
+        pl.simulate_segments(SP, [1.0], [0.0], t_end=1.0, save_every=3, segment_steps=10)
+
+
+# --------------------------------------------------------------------------- bad input
+def test_a_run_too_large_for_memory_is_refused_with_the_numbers():
+    with pytest.raises(ValueError) as info:
+        pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=1e9, dt=1e-9)
+    message = str(info.value)
+    for name in ("`t_end`", "`dt`", "`save_every`"):
+        assert name in message
+    assert "1e+18 steps" in message and " EB of memory" in message
+
+
+def test_the_memory_check_counts_the_kept_states(monkeypatch):
+    from pendulum_lab import _validation
+
+    monkeypatch.setattr(_validation, "physical_memory", lambda: 1_000_000)
+    # 100,001 states x (5 * 2 + 3) floats x 8 bytes = 10.4 MB > 1 MB: refused ...
+    with pytest.raises(ValueError, match="needs at least 10.4 MB"):
+        pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=10.0, dt=1e-4, method="rk4")
+    # ... keeping every 100th state (10 kB) is not (negative control)
+    traj = pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=10.0, dt=1e-4, method="rk4",
+                       save_every=100)
+    assert traj.theta.shape == (1001, 2)
+
+
+def test_step_takes_velocities_or_momenta_and_returns_momenta():
+    theta0, omega0 = np.array([1.0, 0.5]), np.array([0.3, -0.2])
+    p0 = DP.momenta(theta0, omega0)
+    by_omega = pl.step(DP, theta0, omega0, dt=0.01, method="glrk4")
+    by_p = pl.step(DP, theta0, p0=p0, dt=0.01, method="glrk4")
+    assert np.allclose(by_omega[0], by_p[0], rtol=0, atol=1e-15)
+    assert np.allclose(by_omega[1], by_p[1], rtol=0, atol=1e-14)
+    # negative control: the velocities read as momenta are another state
+    wrong = pl.step(DP, theta0, p0=omega0, dt=0.01, method="glrk4")
+    assert np.max(np.abs(wrong[1] - by_p[1])) > 1e-3
+    with pytest.raises(TypeError, match="exactly one"):
+        pl.step(DP, theta0, omega0, p0=p0, dt=0.01)
+
+
+def test_chain_equilibrium_by_name():
+    chain = pl.derive_chain(2)
+    assert [float(a) for a in chain.equilibrium("down-up").angles] == [0.0, np.pi]
+    assert chain.equilibrium("up-down") is chain.equilibria[2]
+    with pytest.raises(ValueError, match="must be one of"):
+        chain.equilibrium("sideways")
+
+
+# --------------------------------------------------------------------------- events
+def test_crossings_of_a_sine_in_each_direction():
+    t = np.linspace(0.0, 4 * np.pi, 401)
+    up = events.find_crossings(np.sin(t - 0.3), direction=1)
+    down = events.find_crossings(np.sin(t - 0.3), direction=-1)
+    both = events.find_crossings(np.sin(t - 0.3), direction=0)
+    located = t[up.step] + up.fraction() * (t[1] - t[0])
+    assert np.allclose(located, [0.3, 2 * np.pi + 0.3], atol=1e-4)
+    falling = t[down.step] + down.fraction() * (t[1] - t[0])
+    assert np.allclose(falling, [np.pi + 0.3, 3 * np.pi + 0.3], atol=1e-4)
+    assert len(both) == len(up) + len(down) == 4
+    with pytest.raises(ValueError, match="`direction`"):
+        events.find_crossings(np.sin(t), direction=2)
+
+
+def test_periodic_levels_count_every_turn():
+    angle = np.linspace(0.0, 4.5 * np.pi, 200)  # a rotating angle passes pi, 3 pi
+    hits = events.find_crossings(angle, direction=1, level=np.pi, period=2 * np.pi)
+    assert np.allclose(hits.level, [np.pi, 3 * np.pi])
+    # negative control: without the period only the first level is crossed
+    assert len(events.find_crossings(angle, direction=1, level=np.pi)) == 1
+
+
+def test_hermite_root_is_fourth_order_and_linear_is_second():
+    # g = cos(t) - 0.2 crosses zero at arccos(0.2); sample it at steps h and 2h.
+    root, steps = np.arccos(0.2), np.array([0.4, 0.2, 0.1, 0.05, 0.025])
+    cubic, linear = [], []
+    for h in steps:
+        t = np.arange(0.0, 2.0, h)
+        hits = events.find_crossings(np.cos(t) - 0.2, direction=-1)
+        k = hits.step
+        rate = -h * np.sin(t)
+        cubic.append(abs(t[k[0]] + hits.fraction(rate[k], rate[k + 1])[0] * h - root))
+        linear.append(abs(t[k[0]] + hits.fraction()[0] * h - root))
+    cubic_order = np.polyfit(np.log(steps), np.log(cubic), 1)[0]
+    linear_order = np.polyfit(np.log(steps), np.log(linear), 1)[0]
+    assert cubic_order > 3.5 and cubic[-1] < 1e-9
+    assert 1.5 < linear_order < 2.5 and linear[-1] > 1e-6  # negative control
+
+
+def test_first_keeps_one_crossing_per_member():
+    values = np.array([[-1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [1.0, -1.0]])
+    hits = events.find_crossings(values, direction=1)
+    assert sorted(zip(hits.member.tolist(), hits.step.tolist())) == [(0, 0), (0, 2), (1, 1)]
+    first = hits.first()
+    assert sorted(zip(first.member.tolist(), first.step.tolist())) == [(0, 0), (1, 1)]
+
+
+def test_land_puts_a_step_of_the_integrator_on_the_surface():
+    # Land the simple pendulum on theta = 0.3, from the state a step before.
+    q0, p0, dt = np.array([0.25]), np.array([1.0]), 0.1
+
+    def advance(tau):
+        return (q0, p0) if tau == 0.0 else pl.step(SP, q0, p0=p0, dt=tau, method="glrk4")
+
+    miss, (q, p), tau = events.land(
+        advance, lambda s: s[0][0] - 0.3, lambda s: SP.dH_dp(*s)[0], 0.05, (-dt, 2 * dt),
+        scale=0.3,
+    )
+    assert miss < 1e-15 and abs(q[0] - 0.3) < 1e-15 and 0 < tau < dt
+    # the landed state is one step of the method from the saved state, not an interpolation
+    direct = pl.step(SP, q0, p0=p0, dt=tau, method="glrk4")
+    assert np.array_equal(direct[0], q) and np.array_equal(direct[1], p)
+    # negative control: without iterating, the first guess is off the surface
+    assert abs(advance(0.05)[0][0] - 0.3) > 1e-4
