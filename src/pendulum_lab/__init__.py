@@ -16,9 +16,9 @@ Quick start
 True
 """
 
-from .integrators import METHODS, ConvergenceError, Method, get_method
+from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
 from .mechanics import Chain, derive_chain
-from .model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
 from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
 
@@ -43,6 +43,7 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
+    "CONFORMAL_METHODS",
     "METHODS",
     "Chain",
     "ConvergenceError",
@@ -52,6 +53,7 @@ __all__ = [
     "Trajectory",
     "derive_chain",
     "double_pendulum",
+    "driven_pendulum",
     "get_method",
     "hamiltonian_field",
     "modified_hamiltonian",
