@@ -12,6 +12,7 @@ category; a test asserts that a category is empty, a negative control that it is
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import functools
 import http.server
@@ -275,34 +276,36 @@ def crawl(
 
     Requests to any host other than the local server are recorded and blocked. Animations are
     played in the first mode only. Screenshots (whole page, at most 16000 px tall) go to
-    ``screenshots/MODE/PAGE.png`` when a folder is given.
+    ``screenshots/MODE/PAGE.png`` when a folder is given. The modes run side by side, each in
+    a thread with its own Playwright and Chromium (Playwright's rule: one instance per thread);
+    the time goes into Chromium's rendering and screenshots, one core per browser.
     """
+    pages = list_pages(html_dir) if pages is None else pages
+    jobs = [
+        (html_dir, pages, mode, screenshots, play_animations and mode == modes[0]) for mode in modes
+    ]
+    if len(jobs) == 1:
+        return _crawl_mode(*jobs[0])
+    with concurrent.futures.ThreadPoolExecutor(len(jobs)) as pool:
+        results = list(pool.map(_crawl_mode, *zip(*jobs)))
+    return [report for result in results for report in result]
+
+
+def _crawl_mode(html_dir, pages, mode, screenshots, play) -> list[PageReport]:
     from playwright.sync_api import sync_playwright
 
-    pages = list_pages(html_dir) if pages is None else pages
-    reports: list[PageReport] = []
+    reports = []
     with serve(html_dir) as base, sync_playwright() as p:
         browser = p.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
         try:
-            for mode in modes:
-                context = browser.new_context(viewport=VIEWPORT, color_scheme=mode)
-                # The theme keeps the reader's choice in localStorage; set it as a reader would.
-                context.add_init_script(
-                    f"localStorage.setItem('mode', '{mode}');"
-                    f"localStorage.setItem('theme', '{mode}');"
-                )
-                for page_path in pages:
-                    reports.append(
-                        _visit(
-                            context,
-                            base,
-                            page_path,
-                            mode,
-                            screenshots,
-                            play=play_animations and mode == modes[0],
-                        )  # fmt: skip
-                    )
-                context.close()
+            context = browser.new_context(viewport=VIEWPORT, color_scheme=mode)
+            # The theme keeps the reader's choice in localStorage; set it as a reader would.
+            context.add_init_script(
+                f"localStorage.setItem('mode', '{mode}'); localStorage.setItem('theme', '{mode}');"
+            )
+            for page_path in pages:
+                reports.append(_visit(context, base, page_path, mode, screenshots, play))
+            context.close()
         finally:
             browser.close()
     return reports
