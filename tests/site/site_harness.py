@@ -17,9 +17,7 @@ import contextlib
 import functools
 import http.server
 import json
-import os
 import re
-import shutil
 import sys
 import threading
 from dataclasses import dataclass, field
@@ -27,24 +25,17 @@ from html.parser import HTMLParser
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
-import pytest
-
 REPO_ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = REPO_ROOT / "test-artifacts" / "site"
 SCREENSHOTS = ARTIFACTS / "screenshots"
-sys.path.insert(0, str(REPO_ROOT / "tools"))
+sys.path[:0] = [str(REPO_ROOT / "tools"), str(REPO_ROOT / "tests" / "browser")]
 
 import build_site  # noqa: E402  (tools/ is not a package)
 
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-]
+# One way to start Debian's Chromium and to decide between skipping and failing, shared with the
+# JupyterLab tests.
+from lab_harness import CHROMIUM_ARGS, chromium_path, in_ci  # noqa: E402, F401 (in_ci: conftest)
+
 VIEWPORT = {"width": 1300, "height": 900}
 MAX_SCREENSHOT_HEIGHT = 16000
 MODES = ("light", "dark")
@@ -67,16 +58,6 @@ CATEGORIES = (
 # ---------------------------------------------------------------------------------------------
 # Availability policy (as in tests/browser)
 # ---------------------------------------------------------------------------------------------
-def in_ci() -> bool:
-    return os.environ.get("CI", "").strip().lower() == "true"
-
-
-def chromium_path() -> str | None:
-    if os.access(CHROMIUM, os.X_OK):
-        return CHROMIUM
-    return shutil.which("chromium")
-
-
 def site_unavailable_reason() -> str | None:
     """Why the site tests cannot run here, or None when they can."""
     for module in ("sphinx", "myst_nb", "sphinx_book_theme", "numpydoc"):
@@ -91,12 +72,6 @@ def site_unavailable_reason() -> str | None:
     if chromium_path() is None:
         return "Chromium not found at /usr/bin/chromium nor on PATH; apt-get install -y chromium"
     return build_site.missing_mathjax()
-
-
-def skip_or_fail(reason: str) -> None:
-    if in_ci():
-        pytest.fail(f"{reason} (CI=true: this test must run in CI)", pytrace=False)
-    pytest.skip(reason)
 
 
 # ---------------------------------------------------------------------------------------------

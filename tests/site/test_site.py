@@ -13,7 +13,7 @@ import pkgutil
 import re
 
 import pytest
-from site_harness import MODES, REPO_ROOT, SCREENSHOTS, list_pages
+from site_harness import CATEGORIES, MODES, REPO_ROOT, SCREENSHOTS, list_pages
 
 import pendulum_lab
 
@@ -105,21 +105,7 @@ def test_no_launch_link_while_the_repository_is_unset(course_site):
 # ---------------------------------------------------------------------------------------------
 # Every page in the browser
 # ---------------------------------------------------------------------------------------------
-@pytest.mark.parametrize(
-    "category",
-    [
-        "error output",
-        "images",
-        "alt text",
-        "math",
-        "animations",
-        "external requests",
-        "failed requests",
-        "console errors",
-        "internal links",
-        "dark mode",
-    ],
-)
+@pytest.mark.parametrize("category", CATEGORIES)
 def test_pages_in_the_browser(course_pages, category):
     """No error output or traceback; every picture loaded and described; mathematics typeset;
     each animation advances when played; no request outside the site and none failing; no
