@@ -69,6 +69,8 @@ myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence"]
 myst_heading_anchors = 3
 
 # ---- API reference -----------------------------------------------------------------------------
+# api.md generates one page per module into this folder (git-ignored, written anew every build).
+course_api_folder = "reference"
 autosummary_generate = True
 autosummary_ignore_module_all = True  # find every submodule, not only those in __all__
 autodoc_typehints = "none"  # numpydoc sections carry the types

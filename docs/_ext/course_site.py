@@ -356,6 +356,12 @@ def check_package(app) -> None:
     app.course_build_started = time.time()
 
 
+def clear_api_stubs(app) -> None:
+    """Delete the API page sources of the last build before autosummary writes them again: a
+    module that was removed or moved would otherwise leave an orphan page behind."""
+    shutil.rmtree(Path(app.srcdir) / app.config.course_api_folder, ignore_errors=True)
+
+
 def write_execution_report(app, exception) -> None:
     """``execution.json`` beside the HTML folder: per notebook, whether this build ran it or
     took it from the cache, and its run time (what the build's speed depends on)."""
@@ -459,8 +465,10 @@ def setup(app):
     app.add_config_value("course_jupyterhub_url", "", "html", types=(str,))
     app.add_config_value("course_repository_branch", "main", "html", types=(str,))
     app.add_config_value("course_widgets_without_picture", {}, "env", types=(dict,))
+    app.add_config_value("course_api_folder", "reference", "env", types=(str,))
     app.connect("config-inited", configure_launch, priority=100)
     app.connect("builder-inited", check_package)
+    app.connect("builder-inited", clear_api_stubs, priority=100)  # before autosummary (500)
     app.connect("env-get-outdated", outdated_notebooks)
     app.connect("doctree-read", replace_widgets)
     app.connect("doctree-read", fill_alt_text)
