@@ -43,14 +43,13 @@ copyright = "2026, " + author
 extensions = [
     "myst_nb",
     "sphinx.ext.autodoc",
-    "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
     "numpydoc",
     "course_site",
 ]
 
 root_doc = "index"
-templates_path = ["_templates"]
+
 exclude_patterns = ["_build", "_vendor", "README.md", "**/.ipynb_checkpoints", "Thumbs.db"]
 
 # ---- notebooks: executed with a cache, so an unchanged notebook is not re-run ----------------
@@ -69,10 +68,10 @@ myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence"]
 myst_heading_anchors = 3
 
 # ---- API reference -----------------------------------------------------------------------------
-# api.md generates one page per module into this folder (git-ignored, written anew every build).
+# One page per public module of this package, written into this folder by course_site.py
+# (git-ignored, written anew every build); api.md links the package's page.
+course_api_package = "pendulum_lab"
 course_api_folder = "reference"
-autosummary_generate = True
-autosummary_ignore_module_all = True  # find every submodule, not only those in __all__
 autodoc_typehints = "none"  # numpydoc sections carry the types
 autodoc_member_order = "bysource"
 numpydoc_show_class_members = False

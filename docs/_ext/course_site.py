@@ -19,6 +19,7 @@ What it adds to Sphinx + MyST-NB + sphinx-book-theme (see docs/README.md for the
   the cache is emptied and every notebook is read again, so no page shows outputs of older code.
 * **The course map** (directive ``course-map``): the notebooks found in ``notebooks/``, in
   reading order, each with its title and first sentence.
+* **API pages**: one page per public module of the package, found by walking it.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import hashlib
 import html
 import importlib.util
 import json
+import pkgutil
 import re
 import shutil
 import time
@@ -356,10 +358,50 @@ def check_package(app) -> None:
     app.course_build_started = time.time()
 
 
-def clear_api_stubs(app) -> None:
-    """Delete the API page sources of the last build before autosummary writes them again: a
-    module that was removed or moved would otherwise leave an orphan page behind."""
-    shutil.rmtree(Path(app.srcdir) / app.config.course_api_folder, ignore_errors=True)
+def public_modules(package_name: str) -> list[str]:
+    """The package and every module below it whose dotted name has no part starting with
+    ``_``, in walking order (a package before its modules)."""
+    package = importlib.import_module(package_name)
+    found = [package_name]
+    for info in pkgutil.walk_packages(package.__path__, package_name + "."):
+        if not any(part.startswith("_") for part in info.name.split(".")):
+            found.append(info.name)
+    return found
+
+
+def _first_line(module) -> str:
+    doc = (module.__doc__ or "").strip()
+    return doc.splitlines()[0].rstrip(".") if doc else ""
+
+
+def write_api_pages(app) -> None:
+    """One reST page per public module of ``course_api_package`` in ``course_api_folder``.
+
+    A module's page is ``automodule`` with its members (its ``__all__``); a package's page is
+    its docstring and a list of its modules. Written anew on every build, so a removed module
+    leaves no orphan page. The modules are imported by name: ``pendulum_lab.simulate`` is the
+    module even though the package's attribute ``simulate`` is the function (autosummary's
+    lookup takes the attribute, and documented the function instead of the module).
+    """
+    if not app.config.course_api_package:
+        return  # a site without an API reference (the tests' throwaway sites)
+    folder = Path(app.srcdir) / app.config.course_api_folder
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
+    names = public_modules(app.config.course_api_package)
+    for name in names:
+        children = [other for other in names if other.rpartition(".")[0] == name]
+        title = name.replace("_", "\\_")
+        lines = [title, "=" * len(title), "", f".. automodule:: {name}"]
+        if children:
+            lines += ["", ".. rubric:: Modules", ""]
+            for child in children:
+                summary = _first_line(importlib.import_module(child))
+                lines.append(f"* :mod:`{child}`" + (f" -- {summary}" if summary else ""))
+            lines += ["", ".. toctree::", "   :hidden:", ""] + [f"   {c}" for c in children]
+        else:
+            lines += ["   :members:", "   :show-inheritance:"]
+        (folder / f"{name}.rst").write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
 def write_execution_report(app, exception) -> None:
@@ -466,9 +508,10 @@ def setup(app):
     app.add_config_value("course_repository_branch", "main", "html", types=(str,))
     app.add_config_value("course_widgets_without_picture", {}, "env", types=(dict,))
     app.add_config_value("course_api_folder", "reference", "env", types=(str,))
+    app.add_config_value("course_api_package", "pendulum_lab", "env", types=(str,))
     app.connect("config-inited", configure_launch, priority=100)
     app.connect("builder-inited", check_package)
-    app.connect("builder-inited", clear_api_stubs, priority=100)  # before autosummary (500)
+    app.connect("builder-inited", write_api_pages)
     app.connect("env-get-outdated", outdated_notebooks)
     app.connect("doctree-read", replace_widgets)
     app.connect("doctree-read", fill_alt_text)

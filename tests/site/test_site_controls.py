@@ -59,8 +59,12 @@ def make_site(folder: Path, files: dict[str, str]) -> Path:
     return folder
 
 
-def build(folder: Path, **kwargs):
-    return build_site.build(source=folder, output=folder / "_build" / "html", jobs=1, **kwargs)
+def build(folder: Path, overrides: dict | None = None, **kwargs):
+    """Build a throwaway site with the course configuration, without the API reference."""
+    overrides = {"course_api_package": "", **(overrides or {})}
+    return build_site.build(
+        source=folder, output=folder / "_build" / "html", jobs=1, overrides=overrides, **kwargs
+    )
 
 
 INDEX = """\
