@@ -1,7 +1,7 @@
-"""What a chain of ``n`` links costs: symbolic derivation, first use, a step.
+"""What things cost on this machine: a chain of ``n`` links, a method's first use.
 
 Timings are measurements of this machine and this session (what is already
-compiled or cached), printed by notebook 12; the speed targets of the package
+compiled or cached), printed by notebooks 00 and 12; the speed targets of the package
 live in ``benchmarks/`` as ratios.
 """
 
@@ -19,7 +19,7 @@ from .mechanics import Chain
 from .model import n_pendulum
 from .simulate import simulate, time_grid
 
-__all__ = ["ChainCost", "chain_costs"]
+__all__ = ["ChainCost", "FirstUseCost", "chain_costs", "first_use_cost"]
 
 
 @dataclass(frozen=True)
@@ -97,3 +97,87 @@ def chain_costs(
         ]
         rows.append(ChainCost(n, derivation, build, first, min(repeats) / steps, method.name))
     return rows
+
+
+@dataclass(frozen=True)
+class FirstUseCost:
+    """What the first simulation costs on a new machine, and on later sessions.
+
+    Attributes
+    ----------
+    compile : float
+        Seconds for the first :func:`~pendulum_lab.simulate` call of a fresh
+        process whose kernel caches are empty: the kernels are generated and
+        compiled by Numba (what every method costs once per machine).
+    load : float
+        The same call in a second fresh process, with the caches the first one
+        filled: machine code loaded from disk.
+    run : float
+        The same call repeated within that process: the simulation itself.
+    method : str
+    n : int
+    """
+
+    compile: float
+    load: float
+    run: float
+    method: str
+    n: int
+
+
+_FIRST_USE = """
+import json, sys, time
+import numpy as np
+import pendulum_lab as pl
+n, method = int(sys.argv[1]), sys.argv[2]
+model = pl.n_pendulum(n)
+times = []
+for _ in range(2):
+    start = time.perf_counter()
+    pl.simulate(model, np.full(n, 0.5), np.zeros(n), t_end=1.0, dt=0.01, method=method,
+                progress=False)
+    times.append(time.perf_counter() - start)
+print(json.dumps(times))
+"""
+
+
+def first_use_cost(n: int = 2, method="glrk4") -> FirstUseCost:
+    """Measure the one-time compilation of a method's kernels, against loading and running.
+
+    Two fresh Python processes share new, empty temporary cache folders
+    (``PENDULUM_LAB_CACHE`` for the generated kernel source,
+    ``NUMBA_CACHE_DIR`` for Numba's machine code): the first compiles, the
+    second loads. Each runs a 1 s simulation of ``n`` links (100 steps) twice.
+    The caches of the running session and of the user are not touched.
+
+    Parameters
+    ----------
+    n : int
+        Number of links.
+    method : str or Method
+
+    Returns
+    -------
+    FirstUseCost
+        Timings of this machine (a measurement, not a constant).
+    """
+    import json
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    n = check.integer_at_least("n", n, 1)
+    name = get_method(method).name
+    firsts, seconds = [], []
+    with tempfile.TemporaryDirectory() as kernels, tempfile.TemporaryDirectory() as machine_code:
+        env = os.environ | {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": machine_code}
+        for _ in range(2):
+            done = subprocess.run([sys.executable, "-c", _FIRST_USE, str(n), name], env=env,
+                                  capture_output=True, text=True, check=False)
+            if done.returncode != 0:
+                raise RuntimeError(f"the measuring process failed: {done.stderr.strip()[-500:]}")
+            first, second = json.loads(done.stdout.strip().splitlines()[-1])
+            firsts.append(first)
+            seconds.append(second)
+    return FirstUseCost(compile=firsts[0], load=firsts[1], run=seconds[1], method=name, n=n)
