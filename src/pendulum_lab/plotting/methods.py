@@ -91,7 +91,7 @@ def plot_amplification(h_omega, factors: dict, limits: dict | None = None,
     limits = {} if limits is None else limits
     # Methods can coincide on the oscillator (symplectic Euler and the leapfrog
     # do): each gets its own dash pattern, so none hides another.
-    dashes = ["-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1))]
+    dashes = ["-", "--", "-.", (0, (7, 2)), (0, (3, 1, 1, 1, 1, 1))]
     for k, (name, values) in enumerate(factors.items()):
         values = np.asarray(values, dtype=float)
         if values.shape != h_omega.shape:
