@@ -11,6 +11,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from sympy import count_ops
 from sympy.core.cache import clear_cache
 
 from . import _validation as check
@@ -29,6 +30,10 @@ class ChainCost:
     Attributes
     ----------
     n : int
+    operations : int
+        Arithmetic and function operations in the mass matrix and the forcing
+        (``sympy.count_ops``): the size of the equations, the same on every
+        computer, unlike the times.
     derivation : float
         Seconds for a fresh symbolic derivation (:class:`~pendulum_lab.Chain`).
     build : float
@@ -39,21 +44,30 @@ class ChainCost:
     per_step : float
         Seconds per step of a repeated run (``Trajectory.wall_time / steps``,
         the best of three runs).
+    evaluations_per_step : float
+        Vector-field evaluations per step in that run (implicit methods make
+        one per stage and fixed-point sweep, so this depends on the motion).
+    per_evaluation : float
+        Seconds per evaluation in that run: the cost of Hamilton's equations
+        for ``n`` links, apart from how many the method needs.
     method : str
     """
 
     n: int
+    operations: int
     derivation: float
     build: float
     first_simulation: float
     per_step: float
+    evaluations_per_step: float
+    per_evaluation: float
     method: str
 
 
 def chain_costs(
     ns=(3, 4, 5), *, t_end: float = 2.0, dt: float = 0.01, method="glrk4"
 ) -> list[ChainCost]:
-    """Measure derivation time, first-use time and step cost of n-link chains.
+    """Measure derivation time, first-use time, step and evaluation cost of n-link chains.
 
     For each ``n``: a fresh :class:`~pendulum_lab.mechanics.Chain` is
     derived and timed (after clearing SymPy's cache); then the model is
@@ -80,8 +94,9 @@ def chain_costs(
         n = check.integer_at_least("ns", n, 1)
         clear_cache()  # SymPy's own cache would make a repeated derivation look cheap
         start = time.perf_counter()
-        Chain(n)
+        chain = Chain(n)
         derivation = time.perf_counter() - start
+        operations = int(count_ops([*chain.mass_matrix, *chain.forcing]))
         start = time.perf_counter()
         model = n_pendulum(n)
         build = time.perf_counter() - start
@@ -90,12 +105,13 @@ def chain_costs(
         simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method, progress=False)
         first = time.perf_counter() - start
         repeats = [
-            simulate(
-                model, theta0, omega0, t_end=t_end, dt=dt, method=method, progress=False
-            ).wall_time
+            simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method, progress=False)
             for _ in range(3)
         ]
-        rows.append(ChainCost(n, derivation, build, first, min(repeats) / steps, method.name))
+        best = min(repeats, key=lambda run: run.wall_time)
+        rows.append(ChainCost(n, operations, derivation, build, first, best.wall_time / steps,
+                              best.evaluations / steps, best.wall_time / best.evaluations,
+                              method.name))
     return rows
 
 
