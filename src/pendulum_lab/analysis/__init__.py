@@ -4,13 +4,16 @@ Each function returns numbers a test or a notebook can assert on; none
 prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
 :mod:`pendulum_lab.tables`). By topic:
 
-* :mod:`.structure`: symplecticity defect and reversibility error of one step;
+* :mod:`.structure`: symplecticity defect, reversibility error and linear
+  stability (amplification of small swings) of one step;
 * :mod:`.accuracy`: observed order against a DOP853 reference, energy error
   over time;
 * :mod:`.comparison`: work-precision, a DOP853 run, one table row per method,
   one initial state by several methods;
 * :mod:`.oscillations`: exact and measured periods, spectra;
-* :mod:`.linearization`: equilibria, normal modes, the linearised motion.
+* :mod:`.linearization`: equilibria, normal modes, the linearised motion;
+* :mod:`.modified_energy`: the modified Hamiltonian of symplectic Euler
+  (backward error analysis, one link).
 """
 
 from .accuracy import (
@@ -40,19 +43,34 @@ from .linearization import (
     find_equilibrium,
     linearized_solution,
     normal_mode_frequencies,
+    normal_modes,
     rest_state_at_energy,
 )
+from .modified_energy import (
+    STEP_SIZE,
+    ModifiedHamiltonian,
+    symplectic_euler_modified_hamiltonian,
+)
 from .oscillations import dominant_frequencies, exact_period, oscillation_period, spectrum
-from .structure import reversibility_error, step_jacobian, symplecticity_defect
+from .structure import (
+    amplification,
+    reversibility_error,
+    stability_limit,
+    step_jacobian,
+    symplecticity_defect,
+)
 
 __all__ = [
     "HIGH_ORDER_DTS",
+    "STEP_SIZE",
     "ORDER_DTS",
     "ComparisonRow",
+    "ModifiedHamiltonian",
     "EnergyComparison",
     "OrderResult",
     "ReferenceRun",
     "WorkPrecision",
+    "amplification",
     "compare_energy",
     "compare_trajectory",
     "dominant_frequencies",
@@ -64,6 +82,7 @@ __all__ = [
     "find_equilibrium",
     "linearized_solution",
     "normal_mode_frequencies",
+    "normal_modes",
     "observed_order",
     "order_steps",
     "oscillation_period",
@@ -72,7 +91,9 @@ __all__ = [
     "rest_state_at_energy",
     "reversibility_error",
     "spectrum",
+    "stability_limit",
     "step_jacobian",
+    "symplectic_euler_modified_hamiltonian",
     "symplecticity_defect",
     "windowed_energy_error",
     "work_precision",

@@ -1,25 +1,40 @@
-"""Geometric structure of one step: symplecticity and time reversibility.
+"""Geometric structure of one step: symplecticity, time reversibility, linear stability.
 
 A step of an integrator is a map ``(theta, p) -> (theta1, p1)``. It is
 symplectic when its Jacobian ``Psi`` satisfies ``Psi^T J Psi = J`` and
 symmetric (time-reversible) when stepping by ``+h`` then ``-h`` returns to the
-start. Both are measured here on the map :func:`pendulum_lab.step` computes,
-in canonical variables for every method.
+start. At the bottom equilibrium ``Psi`` is the step of the linearised
+pendulum (a harmonic oscillator per normal mode), and its largest eigenvalue
+modulus decides whether small swings stay bounded (linear stability). All are
+measured here on the map :func:`pendulum_lab.step` computes, in canonical
+variables for every method.
 
 References
 ----------
 E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
-Springer 2006, sect. VI.2 (symplectic maps) and V.1 (symmetric methods).
+Springer 2006, sect. VI.2 (symplectic maps), V.1 (symmetric methods) and I.5
+(linear stability of the Stormer-Verlet method); E. Hairer, G. Wanner,
+*Solving Ordinary Differential Equations II*, 2nd ed., Springer 1996,
+sect. IV.2 (stability functions).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from .. import _validation as check
 from ..model import PendulumModel
 from ..simulate import canonical_state, step
 
-__all__ = ["reversibility_error", "step_jacobian", "symplecticity_defect"]
+__all__ = [
+    "amplification",
+    "reversibility_error",
+    "stability_limit",
+    "step_jacobian",
+    "symplecticity_defect",
+]
 
 
 def _canonical_j(n: int) -> np.ndarray:
@@ -87,3 +102,99 @@ def reversibility_error(model: PendulumModel, theta0, omega0=None, *, dt: float,
     q1, p1 = step(model, q, p0=p, dt=dt, method=method)
     q2, p2 = step(model, q1, p0=p1, dt=-dt, method=method)
     return float(max(np.max(np.abs(q2 - q)), np.max(np.abs(p2 - p))))
+
+
+def amplification(model: PendulumModel, dts, *, method="glrk4", eps: float = 1e-3) -> np.ndarray:
+    """Largest eigenvalue modulus of one step's Jacobian at the bottom equilibrium.
+
+    Near the bottom the pendulum is a set of harmonic oscillators (its normal
+    modes, frequencies ``omega_k``), and one step multiplies each by a fixed
+    matrix. Above 1, small swings grow by that factor per step (their energy
+    by its square); at most 1, they stay bounded. For a Runge-Kutta method it
+    is ``max_k |R(i h omega_k)|`` with the stability function ``R``.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    dts : array_like, shape (N,)
+        Step sizes [s]; with one link, ``dts * omega_0`` is the usual ``h omega``.
+    method : str or Method
+    eps : float
+        Finite-difference increment of :func:`step_jacobian`. Too small, and
+        the implicit solvers' round-off stopping rule shows in the
+        eigenvalues; too large, and the pendulum's nonlinearity does (an
+        ``O(eps^2)`` relative effect).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> unit = pl.simple_pendulum(length=1.0, g=1.0)  # omega_0 = 1: dt is h omega
+    >>> np.round(amplification(unit, [1.0, 3.0], method="leapfrog"), 4)
+    array([1.    , 6.8541])
+    """
+    check.pendulum_model(model)
+    dts = np.atleast_1d(np.asarray(dts, dtype=float))
+    rest = np.zeros(model.n)
+    factors = [
+        np.max(np.abs(np.linalg.eigvals(
+            step_jacobian(model, rest, p0=rest, dt=dt, method=method, eps=eps))))
+        for dt in dts
+    ]
+    return np.array(factors)
+
+
+def stability_limit(model: PendulumModel, *, method="glrk4", dt_max: float,
+                    tolerance: float = 1e-5, points: int = 64) -> float:
+    """The largest step [s] for which small swings about the bottom stay bounded.
+
+    Scans :func:`amplification` on ``points`` steps up to ``dt_max`` and
+    bisects the first interval where it exceeds ``1 + tolerance`` (the
+    tolerance absorbs the finite-difference noise, about 1e-7).
+
+    Parameters
+    ----------
+    model : PendulumModel
+    method : str or Method
+    dt_max : float
+        Largest step scanned [s]. Implicit methods solved by fixed-point
+        iteration stop converging beyond ``h omega`` of about 3.
+    tolerance : float
+    points : int
+
+    Returns
+    -------
+    float
+        ``0.0`` when even the smallest step scanned amplifies (no stability
+        interval, as for explicit Euler); ``math.inf`` when no step up to
+        ``dt_max`` does.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> unit = pl.simple_pendulum(length=1.0, g=1.0)
+    >>> round(stability_limit(unit, method="rk4", dt_max=3.2), 4)  # 2 sqrt(2)
+    2.8284
+    """
+    dt_max = check.positive_number("dt_max", dt_max)
+    points = check.integer_at_least("points", points, 2)
+
+    def unstable(dt):
+        return amplification(model, [dt], method=method)[0] > 1.0 + tolerance
+
+    grid = np.linspace(dt_max / points, dt_max, points)
+    if unstable(grid[0]):
+        return 0.0
+    first = next((k for k in range(1, points) if unstable(grid[k])), None)
+    if first is None:
+        return math.inf
+    low, high = grid[first - 1], grid[first]
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if unstable(middle) else (middle, high)
+        if high - low <= 1e-12 * high:
+            break
+    return float(low)

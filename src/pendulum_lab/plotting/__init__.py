@@ -8,7 +8,8 @@ and a test can inspect the artists under any backend. By topic:
 * :mod:`.figures`: new figures, the one axes helper, link subscripts, colours;
 * :mod:`.trajectories`: energies, angles, phase space, the chain, the
   explorers' :data:`PANELS`;
-* :mod:`.methods`: observed order, energy error growth, work-precision;
+* :mod:`.methods`: observed order, energy error growth, work-precision,
+  amplification of small swings (linear stability);
 * :mod:`.chaos`: separation, Lyapunov exponents, Poincare sections, the
   flip-time map, the small-angle comparison.
 """
@@ -36,6 +37,7 @@ from .figures import (
     wrap_angle,
 )
 from .methods import (
+    plot_amplification,
     plot_energy_comparison,
     plot_energy_error_growth,
     plot_order,
@@ -50,6 +52,8 @@ from .trajectories import (
     plot_energy_error,
     plot_linear_vs_nonlinear,
     plot_link_projections,
+    plot_modified_level_sets,
+    plot_normal_modes,
     plot_period_vs_amplitude,
     plot_phase,
     plot_phase_portrait,
@@ -69,6 +73,7 @@ __all__ = [
     "get_axes",
     "link_label",
     "new_figure",
+    "plot_amplification",
     "plot_angles",
     "plot_energy",
     "plot_energy_comparison",
@@ -78,6 +83,8 @@ __all__ = [
     "plot_linear_vs_nonlinear",
     "plot_link_projections",
     "plot_lyapunov",
+    "plot_modified_level_sets",
+    "plot_normal_modes",
     "plot_order",
     "plot_parting",
     "plot_period_vs_amplitude",

@@ -11,6 +11,7 @@ from ..analysis import EnergyComparison, OrderResult, ReferenceRun
 from .figures import get_axes
 
 __all__ = [
+    "plot_amplification",
     "plot_energy_comparison",
     "plot_energy_error_growth",
     "plot_order",
@@ -60,6 +61,51 @@ def plot_energy_error_growth(runs, ax: Axes | None = None, labels=None) -> Figur
     ax.set_yscale("log")
     ax.set(xlabel="t (s)", ylabel="largest |E(s) - E(0)| for s <= t (J)")
     ax.legend(fontsize="small", ncols=2)
+    return ax.figure
+
+
+def plot_amplification(h_omega, factors: dict, limits: dict | None = None,
+                       ax: Axes | None = None) -> Figure:
+    """Growth factor per step of a small swing against ``h omega``, one line per method.
+
+    Parameters
+    ----------
+    h_omega : array_like, shape (N,)
+        Step times the oscillation's angular frequency.
+    factors : dict
+        ``{method name: amplification at each h_omega}``, shape (N,) each
+        (:func:`pendulum_lab.analysis.amplification`); NaN where not computed.
+    limits : dict, optional
+        ``{method name: largest stable h omega}``; finite ones are marked by a
+        dotted vertical line in the method's colour.
+    ax : Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Above the line at 1 small swings grow step after step; on it they
+        stay bounded.
+    """
+    ax = get_axes(ax, width=7.0, height=4.2)
+    h_omega = np.asarray(h_omega, dtype=float)
+    limits = {} if limits is None else limits
+    # Methods can coincide on the oscillator (symplectic Euler and the leapfrog
+    # do): each gets its own dash pattern, so none hides another.
+    dashes = ["-", "--", "-.", (0, (7, 2)), (0, (3, 1, 1, 1, 1, 1))]
+    for k, (name, values) in enumerate(factors.items()):
+        values = np.asarray(values, dtype=float)
+        if values.shape != h_omega.shape:
+            raise ValueError(f"`factors[{name!r}]` must have the shape of `h_omega`, "
+                             f"{h_omega.shape}, got {values.shape}")
+        line = ax.plot(h_omega, values, ls=dashes[k % len(dashes)], lw=1.8, label=name)[0]
+        limit = limits.get(name)
+        if limit is not None and 0.0 < limit < np.inf:
+            ax.axvline(limit, color=line.get_color(), ls=":", lw=1.0)
+    ax.axhline(1.0, color="black", lw=0.8)
+    ax.set(xlabel="h ω", ylabel="growth factor per step", ylim=(0.4, 1.6),
+           xlim=(0.0, float(h_omega.max())),
+           title="Small swings: growth per step (dotted: each method's stability limit)")
+    ax.legend(fontsize="small", loc="upper left")
     return ax.figure
 
 

@@ -17,7 +17,14 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from .. import _validation as check
-from ..analysis import equilibrium_angles, exact_period, find_equilibrium, linearized_solution
+from ..analysis import (
+    ModifiedHamiltonian,
+    equilibrium_angles,
+    exact_period,
+    find_equilibrium,
+    linearized_solution,
+    normal_modes,
+)
 from ..analysis import spectrum as power_spectrum
 from ..model import PendulumModel
 from ..simulate import Trajectory
@@ -44,6 +51,8 @@ __all__ = [
     "plot_energy_error",
     "plot_linear_vs_nonlinear",
     "plot_link_projections",
+    "plot_modified_level_sets",
+    "plot_normal_modes",
     "plot_period_vs_amplitude",
     "plot_phase",
     "plot_phase_portrait",
@@ -247,6 +256,92 @@ def plot_phase_portrait(
     )
     ax.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
     return ax.figure
+
+
+def plot_modified_level_sets(
+    traj: Trajectory, modified: ModifiedHamiltonian, ax: Axes | None = None
+) -> Figure:
+    """A numerical orbit on the level set of the modified energy, beside that of ``H``.
+
+    In the canonical plane ``(theta, p)`` of a simple pendulum: the level set
+    of ``H`` through the orbit's start (dashed), the level set of the modified
+    Hamiltonian ``H~`` at the trajectory's step through the same start
+    (solid), and the computed states (dots). A symplectic method's states
+    follow the solid curve, not the dashed one.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        One run of the method ``modified`` belongs to, on ``modified.model``.
+    modified : ModifiedHamiltonian
+        From :func:`pendulum_lab.analysis.symplectic_euler_modified_hamiltonian`.
+    ax : Axes, optional
+    """
+    traj = single_trajectory(traj)
+    if traj.method.name != modified.method:
+        raise ValueError(
+            f"`traj` was computed with {traj.method.name!r}, but `modified` belongs to "
+            f"{modified.method!r}"
+        )
+    model = modified.model
+    ax = get_axes(ax, width=6.0, height=4.6)
+    theta, p = traj.theta[:, 0], traj.p[:, 0]
+    pad_theta, pad_p = 0.15 * np.ptp(theta) + 0.05, 0.15 * np.ptp(p) + 0.05
+    grid_theta, grid_p = np.meshgrid(
+        np.linspace(theta.min() - pad_theta, theta.max() + pad_theta, 401),
+        np.linspace(p.min() - pad_p, p.max() + pad_p, 401),
+    )
+    exact = model.hamiltonian_value(grid_theta[..., None], grid_p[..., None])
+    tilde = modified(grid_theta[..., None], grid_p[..., None], traj.dt)
+    start_exact = float(model.hamiltonian_value(traj.theta[0], traj.p[0]))
+    start_tilde = float(modified(traj.theta[0], traj.p[0], traj.dt))
+    ax.contour(grid_theta, grid_p, exact, levels=[start_exact], colors="0.45",
+               linestyles="dashed", linewidths=1.4)
+    ax.contour(grid_theta, grid_p, tilde, levels=[start_tilde], colors="tab:blue",
+               linewidths=1.6)
+    ax.plot(theta, p, ".", color="tab:red", ms=4, zorder=3)
+    ax.plot([], [], "--", color="0.45", label="level set of H")
+    ax.plot([], [], color="tab:blue",
+            label=f"level set of the modified H (terms to h^{modified.order})")
+    ax.plot([], [], ".", color="tab:red", label=f"{traj.method.name}, h = {traj.dt:g} s")
+    ax.set(xlabel="θ (rad)", ylabel="p (kg m²/s)",
+           title="The numerical orbit lies on a level set of the modified energy")
+    ax.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
+    return ax.figure
+
+
+def plot_normal_modes(model: PendulumModel, amplitude: float = 0.35, axes=None) -> Figure:
+    """The shape of each normal mode: the chain at both turning points of the mode.
+
+    One panel per mode, slowest first: the chain at ``+amplitude`` (solid) and
+    ``-amplitude`` (dashed) times the mode shape (scaled so that its largest
+    angle is ``amplitude`` [rad]), with the hanging chain dotted. The title
+    gives the mode's angular frequency and its shape (first link's angle 1).
+    """
+    frequencies, shapes = normal_modes(model)
+    amplitude = check.positive_number("amplitude", amplitude)
+    n = model.n
+    if axes is None:
+        axes = new_figure(1, n, width=3.4 * n, height=3.6)[1]
+    axes = np.atleast_1d(axes)
+    if len(axes) != n:
+        raise ValueError(f"`axes` must hold one axes per mode ({n}), got {len(axes)}")
+    reach = 1.1 * sum(model.lengths)
+    for k, (ax, omega, shape) in enumerate(zip(axes, frequencies, shapes)):
+        angles = amplitude * shape / np.max(np.abs(shape))
+        rest_x, rest_y = model.positions(np.zeros(n))
+        ax.plot(np.r_[0.0, rest_x], np.r_[0.0, rest_y], ":", color="0.6", lw=1.5)
+        for sign, style in ((1.0, "-"), (-1.0, "--")):
+            x, y = model.positions(sign * angles)
+            ax.plot(np.r_[0.0, x], np.r_[0.0, y], style, color="0.25", lw=2)
+            ax.scatter(x, y, s=60, color="tab:red" if sign > 0 else "white",
+                       edgecolor="black", zorder=3)
+        ax.plot([0], [0], "s", color="black", ms=6, zorder=4)
+        written = ", ".join(f"{value:.3g}" for value in shape)
+        ax.set(xlim=(-0.75 * reach, 0.75 * reach), ylim=(-reach, 0.15 * reach), aspect="equal",
+               xlabel="x (m)", title=f"mode {k + 1}: ω = {omega:.3f} rad/s\nshape ({written})")
+    axes[0].set_ylabel("y (m)")
+    return axes[0].figure
 
 
 # --------------------------------------------------------------------------- configuration
