@@ -11,9 +11,10 @@ prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
 * :mod:`.comparison`: work-precision, a DOP853 run, one table row per method,
   one initial state by several methods;
 * :mod:`.oscillations`: exact and measured periods, spectra;
-* :mod:`.linearization`: equilibria, normal modes, the linearised motion;
-* :mod:`.modified_energy`: the modified Hamiltonian of symplectic Euler
-  (backward error analysis, one link).
+* :mod:`.linearization`: equilibria, normal modes, the linearised motion.
+
+Modified Hamiltonians (backward error analysis) live in
+:mod:`pendulum_lab.geometric`.
 """
 
 from .accuracy import (
@@ -46,11 +47,6 @@ from .linearization import (
     normal_modes,
     rest_state_at_energy,
 )
-from .modified_energy import (
-    STEP_SIZE,
-    ModifiedHamiltonian,
-    symplectic_euler_modified_hamiltonian,
-)
 from .oscillations import dominant_frequencies, exact_period, oscillation_period, spectrum
 from .structure import (
     amplification,
@@ -62,10 +58,8 @@ from .structure import (
 
 __all__ = [
     "HIGH_ORDER_DTS",
-    "STEP_SIZE",
     "ORDER_DTS",
     "ComparisonRow",
-    "ModifiedHamiltonian",
     "EnergyComparison",
     "OrderResult",
     "ReferenceRun",
@@ -93,7 +87,6 @@ __all__ = [
     "spectrum",
     "stability_limit",
     "step_jacobian",
-    "symplectic_euler_modified_hamiltonian",
     "symplecticity_defect",
     "windowed_energy_error",
     "work_precision",

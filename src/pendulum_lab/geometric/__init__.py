@@ -20,6 +20,18 @@ Submodules
     The figures of notebooks 13-16.
 """
 
-from .backward_error import STEP_SIZE, modified_equation, modified_hamiltonian
+from .backward_error import (
+    STEP_SIZE,
+    ModifiedEnergy,
+    modified_energy,
+    modified_equation,
+    modified_hamiltonian,
+)
 
-__all__ = ["STEP_SIZE", "modified_equation", "modified_hamiltonian"]
+__all__ = [
+    "STEP_SIZE",
+    "ModifiedEnergy",
+    "modified_energy",
+    "modified_equation",
+    "modified_hamiltonian",
+]

@@ -50,11 +50,13 @@ __all__ = [
     "STEP_SIZE",
     "DissipativeTerm",
     "EnergyDrift",
+    "ModifiedEnergy",
     "ModifiedEnergyOrders",
     "energy_drift",
     "first_dissipative_term",
     "generic_modified_hamiltonian",
     "hamiltonian_function",
+    "modified_energy",
     "modified_energy_orders",
     "modified_equation",
     "modified_hamiltonian",
@@ -274,6 +276,57 @@ def modified_equation(model: PendulumModel, method, order: int) -> list[sp.Matri
 
 
 # --------------------------------------------------------------------------- numbers
+@dataclass(frozen=True)
+class ModifiedEnergy:
+    """A truncated modified Hamiltonian of one method and model, symbolic and numeric.
+
+    Attributes
+    ----------
+    expression : sympy.Expr
+        ``H~ = H + h H_1 + ... + h^order H_order`` (from :func:`modified_hamiltonian`).
+    terms : tuple of sympy.Expr
+        ``(H, H_1, ..., H_order)``.
+    method : str
+    model : PendulumModel
+    """
+
+    expression: sp.Expr
+    terms: tuple
+    method: str
+    model: PendulumModel
+
+    @property
+    def order(self) -> int:
+        """The highest power of ``h`` kept."""
+        return len(self.terms) - 1
+
+    @functools.cached_property
+    def _function(self):
+        return hamiltonian_function(self.model, self.expression)
+
+    def __call__(self, theta, p, dt: float) -> np.ndarray:
+        """``H~`` at step ``dt`` for states of shape ``(..., n)``; returns shape ``(...)``."""
+        return self._function(theta, p, float(dt))
+
+
+def modified_energy(model: PendulumModel, method, order: int) -> ModifiedEnergy:
+    """:func:`modified_hamiltonian` with its terms split out, and evaluable on states.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> energy = modified_energy(pl.simple_pendulum(), "semi_implicit_euler", 1)
+    >>> energy.terms[1]
+    -g*p*sin(theta)/(2*l)
+    >>> round(float(energy([[0.5]], [[1.0]], dt=0.1)[0]), 4)  # H - h/2 H_q H_p there
+    -8.3442
+    """
+    expression = sp.expand(modified_hamiltonian(model, method, order))
+    terms = (model.hamiltonian,) + tuple(
+        expression.coeff(STEP_SIZE, j) for j in range(1, order + 1))
+    return ModifiedEnergy(expression, terms, get_method(method).name, model)
+
+
 def hamiltonian_function(model: PendulumModel, expr):
     """``expr`` (in the model's symbols and ``h``) as a NumPy function ``f(theta, p, h)``.
 

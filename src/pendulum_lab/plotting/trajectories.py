@@ -11,6 +11,7 @@ where a rotating link jumps from ``pi`` to ``-pi``.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -18,7 +19,6 @@ from matplotlib.figure import Figure
 
 from .. import _validation as check
 from ..analysis import (
-    ModifiedHamiltonian,
     equilibrium_angles,
     exact_period,
     find_equilibrium,
@@ -28,6 +28,9 @@ from ..analysis import (
 from ..analysis import spectrum as power_spectrum
 from ..model import PendulumModel
 from ..simulate import Trajectory
+
+if TYPE_CHECKING:  # geometric imports plotting's neighbours; only the type is needed here
+    from ..geometric import ModifiedEnergy
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -259,7 +262,7 @@ def plot_phase_portrait(
 
 
 def plot_modified_level_sets(
-    traj: Trajectory, modified: ModifiedHamiltonian, ax: Axes | None = None
+    traj: Trajectory, modified: ModifiedEnergy, ax: Axes | None = None
 ) -> Figure:
     """A numerical orbit on the level set of the modified energy, beside that of ``H``.
 
@@ -273,8 +276,8 @@ def plot_modified_level_sets(
     ----------
     traj : Trajectory
         One run of the method ``modified`` belongs to, on ``modified.model``.
-    modified : ModifiedHamiltonian
-        From :func:`pendulum_lab.analysis.symplectic_euler_modified_hamiltonian`.
+    modified : ModifiedEnergy
+        From :func:`pendulum_lab.geometric.modified_energy`.
     ax : Axes, optional
     """
     traj = single_trajectory(traj)
