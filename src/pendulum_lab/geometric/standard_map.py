@@ -117,7 +117,8 @@ def iterate(phi, action, k: float, iterations: int, wrap: bool = True):
 
     Returns
     -------
-    phi, action : ndarray, shape (iterations + 1, *shape)
+    phi, action : ndarray, shape (iterations + 1, ...)
+        The starting shape after the iteration axis.
 
     Examples
     --------
