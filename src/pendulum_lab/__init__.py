@@ -20,7 +20,7 @@ from .integrators import METHODS, ConvergenceError, Method, get_method
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
-from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
+from .simulate import Trajectory, hamiltonian_field, henon_step, simulate, step, step_count
 
 __version__ = "0.1.0"
 
@@ -49,6 +49,7 @@ __all__ = [
     "double_pendulum",
     "get_method",
     "hamiltonian_field",
+    "henon_step",
     "n_pendulum",
     "simple_pendulum",
     "simulate",
