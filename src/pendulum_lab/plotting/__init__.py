@@ -15,7 +15,9 @@ and a test can inspect the artists under any backend. By topic:
 
 from .chaos import (
     plot_flip_map,
+    plot_landing_errors,
     plot_lyapunov,
+    plot_lyapunov_energy,
     plot_parting,
     plot_section,
     plot_sections,
@@ -75,9 +77,11 @@ __all__ = [
     "plot_energy_error",
     "plot_energy_error_growth",
     "plot_flip_map",
+    "plot_landing_errors",
     "plot_linear_vs_nonlinear",
     "plot_link_projections",
     "plot_lyapunov",
+    "plot_lyapunov_energy",
     "plot_order",
     "plot_parting",
     "plot_period_vs_amplitude",
