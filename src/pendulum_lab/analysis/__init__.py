@@ -7,8 +7,9 @@ prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
 * :mod:`.structure`: symplecticity defect and reversibility error of one step;
 * :mod:`.accuracy`: observed order against a DOP853 reference, energy error
   over time;
-* :mod:`.comparison`: work-precision, a DOP853 run, one table row per method,
-  one initial state by several methods;
+* :mod:`.comparison`: work-precision (energy and global error), a DOP853 run,
+  the comparison table of every method on every problem, one initial state by
+  several methods;
 * :mod:`.oscillations`: exact and measured periods, spectra;
 * :mod:`.linearization`: equilibria, normal modes, the linearised motion.
 """
@@ -18,6 +19,7 @@ from .accuracy import (
     ORDER_DTS,
     OrderResult,
     energy_growth,
+    global_error,
     observed_order,
     order_steps,
     reference_solution,
@@ -26,9 +28,11 @@ from .accuracy import (
 from .comparison import (
     ComparisonRow,
     EnergyComparison,
+    MethodComparison,
     ReferenceRun,
     WorkPrecision,
     compare_energy,
+    compare_methods,
     compare_trajectory,
     dop853_run,
     dop853_work_precision,
@@ -50,10 +54,12 @@ __all__ = [
     "ORDER_DTS",
     "ComparisonRow",
     "EnergyComparison",
+    "MethodComparison",
     "OrderResult",
     "ReferenceRun",
     "WorkPrecision",
     "compare_energy",
+    "compare_methods",
     "compare_trajectory",
     "dominant_frequencies",
     "dop853_run",
@@ -62,6 +68,7 @@ __all__ = [
     "equilibrium_angles",
     "exact_period",
     "find_equilibrium",
+    "global_error",
     "linearized_solution",
     "normal_mode_frequencies",
     "observed_order",

@@ -98,8 +98,9 @@ def plot_order(results, ax: Axes | None = None) -> Figure:
     return ax.figure
 
 
-def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) -> Figure:
-    """Energy error against cost, one line per method (a work-precision diagram).
+def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None,
+                        y: str = "energy_error") -> Figure:
+    """Error against cost, one line per method (a work-precision diagram).
 
     Parameters
     ----------
@@ -107,6 +108,9 @@ def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) ->
     x : {"wall_time", "evaluations"}
         The cost axis.
     ax : Axes, optional
+    y : {"energy_error", "state_error"}
+        The error axis: the largest energy error of the run, or the global
+        error of the state at the final time.
 
     Returns
     -------
@@ -114,19 +118,21 @@ def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) ->
         Lower left is better: less error for less work.
     """
     x = check.choice("x", x, ("wall_time", "evaluations"))
+    y = check.choice("y", y, ("energy_error", "state_error"))
     ax = get_axes(ax, width=6.0, height=4.2)
     for name in dict.fromkeys(point.method for point in points):
         mine = [point for point in points if point.method == name and point.completed]
         style = ":" if name == "DOP853" else "-"
         ax.loglog(
             [getattr(point, x) for point in mine],
-            [point.energy_error for point in mine],
+            [getattr(point, y) for point in mine],
             "o" + style,
             label=name,
         )
     ax.set(
         xlabel="wall time (s)" if x == "wall_time" else "vector-field evaluations",
-        ylabel="max |E - E(0)| (J)",
+        ylabel="max |E - E(0)| (J)" if y == "energy_error"
+        else "global error at T, max |(theta, omega) - reference|",
     )
     ax.legend(fontsize="small")
     return ax.figure
