@@ -10,6 +10,7 @@ prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
 * :mod:`.comparison`: work-precision (energy and global error), a DOP853 run,
   the comparison table of every method on every problem, one initial state by
   several methods;
+* :mod:`.iteration`: how fast an implicit step's stage iteration contracts;
 * :mod:`.oscillations`: exact and measured periods, spectra;
 * :mod:`.linearization`: equilibria, normal modes, the linearised motion.
 """
@@ -39,6 +40,7 @@ from .comparison import (
     pendulum_name,
     work_precision,
 )
+from .iteration import StageIteration, stage_contraction
 from .linearization import (
     equilibrium_angles,
     find_equilibrium,
@@ -57,6 +59,7 @@ __all__ = [
     "MethodComparison",
     "OrderResult",
     "ReferenceRun",
+    "StageIteration",
     "WorkPrecision",
     "compare_energy",
     "compare_methods",
@@ -79,6 +82,7 @@ __all__ = [
     "rest_state_at_energy",
     "reversibility_error",
     "spectrum",
+    "stage_contraction",
     "step_jacobian",
     "symplecticity_defect",
     "windowed_energy_error",

@@ -8,7 +8,8 @@ and a test can inspect the artists under any backend. By topic:
 * :mod:`.figures`: new figures, the one axes helper, link subscripts, colours;
 * :mod:`.trajectories`: energies, angles, phase space, the chain, the
   explorers' :data:`PANELS`;
-* :mod:`.methods`: observed order, energy error growth, work-precision;
+* :mod:`.methods`: observed order, energy error growth, work-precision, the
+  contraction of an implicit method's stage iteration;
 * :mod:`.chaos`: separation, Lyapunov exponents, Poincare sections, the
   flip-time map, the small-angle comparison.
 """
@@ -41,6 +42,7 @@ from .methods import (
     plot_energy_comparison,
     plot_energy_error_growth,
     plot_order,
+    plot_stage_contraction,
     plot_work_precision,
 )
 from .trajectories import (
@@ -92,6 +94,7 @@ __all__ = [
     "plot_separation",
     "plot_small_angle",
     "plot_spectrum",
+    "plot_stage_contraction",
     "plot_work_precision",
     "subscript",
     "wrap_angle",

@@ -1,4 +1,7 @@
-"""Figures that compare integrators: observed order, energy error growth, work-precision."""
+"""Figures that compare integrators: observed order, energy error growth, work-precision.
+
+Also the contraction of an implicit method's stage iteration against the step.
+"""
 
 from __future__ import annotations
 
@@ -14,6 +17,7 @@ __all__ = [
     "plot_energy_comparison",
     "plot_energy_error_growth",
     "plot_order",
+    "plot_stage_contraction",
     "plot_work_precision",
 ]
 
@@ -158,5 +162,30 @@ def plot_energy_comparison(comparison: EnergyComparison, ax: Axes | None = None)
         err = np.abs(traj.relative_energy_error)
         ax.semilogy(traj.t, np.where(err > 0, err, np.nan), label=name, lw=1)
     ax.set(xlabel="t (s)", ylabel="|E - E(0)| / |E(0)|")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_stage_contraction(iterations, ax: Axes | None = None, label: str = "") -> Figure:
+    """Measured and predicted contraction per sweep against the step, log-log.
+
+    Parameters
+    ----------
+    iterations : sequence of StageIteration
+        From :func:`pendulum_lab.analysis.stage_contraction` at several steps.
+    ax : Axes, optional
+    label : str
+        Names the state in the legend.
+    """
+    ax = get_axes(ax, width=6.0, height=4.2)
+    if not iterations:
+        raise ValueError("`iterations` must hold at least one StageIteration")
+    dts = np.array([it.dt for it in iterations])
+    measured = np.array([it.contraction for it in iterations])
+    predicted = np.array([it.predicted for it in iterations])
+    dots = ax.loglog(dts, measured, "o", label=f"measured{', ' + label if label else ''}")[0]
+    ax.loglog(dts, predicted, "-", color=dots.get_color(), lw=1.0,
+              label=f"h rho(A) rho(df/dy){', ' + label if label else ''}")
+    ax.set(xlabel="step h (s)", ylabel="contraction per sweep")
     ax.legend(fontsize="small")
     return ax.figure
