@@ -13,6 +13,7 @@ from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap, LogNorm
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from .. import _validation as check
 from .figures import get_axes, new_figure
@@ -88,6 +89,7 @@ def plot_landing_errors(errors, ax: Axes | None = None, **kwargs) -> Figure:
     order = np.argsort(errors.speed)
     kwargs.setdefault("label", f"{errors.landing}, {errors.method}, dt = {errors.dt:g} s")
     ax.loglog(errors.speed[order], errors.state_error[order], "o-", ms=4, **kwargs)
+    ax.xaxis.set_minor_formatter(NullFormatter())  # a short range labels its minor ticks
     ax.set(xlabel="speed of the crossing |theta' of the surface's link| (rad/s)",
            ylabel="distance from the exact crossing")
     ax.legend(fontsize="small")
