@@ -471,9 +471,7 @@ def lyapunov_by_energy(
     >>> [(row.energy, row.chaotic) for row in scan.per_energy()]
     [(-20.0, 0), (16.0, 2)]
     """
-    check.pendulum_model(model)
-    if model.n != 2:
-        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    check.double_pendulum(model)
     energies = np.array([check.real_number("energies", e) for e in np.atleast_1d(energies)])
     lowest = float(model.potential_energy(np.zeros(2)))
     if energies.size == 0 or np.any(energies <= lowest):

@@ -530,9 +530,7 @@ def energy_sections(
         ``{energy: PoincareSection}``; each section's ``orbit`` numbers its
         own orbits from 0.
     """
-    check.pendulum_model(model)
-    if model.n != 2:
-        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    check.double_pendulum(model)
     orbits = check.integer_at_least("orbits", orbits, 2)
     energies = [check.real_number("energies", e) for e in np.atleast_1d(energies)]
     starts, owner = [], []
@@ -583,9 +581,7 @@ def section_spread(model: PendulumModel, energy: float, orbits: int = 10
     >>> theta0.shape, bool(np.allclose(dp.energy(theta0, omega0), 5.0))
     ((6, 2), True)
     """
-    check.pendulum_model(model)
-    if model.n != 2:
-        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    check.double_pendulum(model)
     energy = check.real_number("energy", energy)
     orbits = check.integer_at_least("orbits", orbits, 2)
     return _spread(model, energy, orbits, "energy")
