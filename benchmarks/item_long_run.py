@@ -78,7 +78,7 @@ def _scipy_rhs(dp):
 
     def compiled(t, y):
         out = np.empty(2)
-        acceleration(y[:2], y[2:], params, out)
+        acceleration(t, y[:2], y[2:], params, out)
         return np.concatenate((y[2:], out))
 
     def numpy_model(t, y):

@@ -63,9 +63,9 @@ def test_gauss_tableaus_are_collocation_of_order_2s():
 
 def test_inconsistent_tableau_is_rejected():
     with pytest.raises(ValueError, match="sum to 1"):
-        ButcherTableau(a=[[0, 0], [0.5, 0]], b=[0.5, 0.6], c=[0, 0.5], order=2)
+        ButcherTableau(a=[[0, 0], [0.5, 0]], b=[0.5, 0.6], c=[0, 0.5])
     with pytest.raises(ValueError, match="row sums"):
-        ButcherTableau(a=[[0, 0], [0.4, 0]], b=[0, 1], c=[0, 0.5], order=2)
+        ButcherTableau(a=[[0, 0], [0.4, 0]], b=[0, 1], c=[0, 0.5])
 
 
 def test_method_registry_properties():
@@ -267,7 +267,7 @@ def test_gauss_step_solves_the_collocation_equations(name, tableau):
 
     def f(y):
         dq, dp = np.empty(2), np.empty(2)
-        field.hamilton(y[:2].copy(), y[2:].copy(), field.params, dq, dp)
+        field.hamilton(0.0, y[:2].copy(), y[2:].copy(), field.params, dq, dp)
         return np.concatenate([dq, dp])
 
     y = np.concatenate([q, p])

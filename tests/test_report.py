@@ -227,7 +227,7 @@ def test_method_source_is_the_running_code_with_its_helpers(name, helper):
 
 def test_velocity_method_source_uses_the_acceleration():
     text = source.method_source("leapfrog_velocity")
-    assert "acceleration(q1, v_half" in text and "hamilton(" not in text
+    assert "acceleration(t + h, q1, v_half" in text and "hamilton(" not in text
 
 
 def test_windowed_energy_error_takes_the_maximum_in_each_window():

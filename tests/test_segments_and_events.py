@@ -301,3 +301,17 @@ def test_henon_loses_accuracy_at_slow_crossings_and_newton_does_not():
     assert henon.state_error[2] > 100 * newton.state_error[2]
     # Negative control: at the brisk crossing the two are alike.
     assert 0.2 < henon.state_error[0] / newton.state_error[0] < 5
+
+
+def test_henon_step_carries_the_time_of_a_driven_model():
+    driven = pl.driven_pendulum()  # damped and driven: the field depends on t
+    start, p_start, t0 = np.array([-0.02]), np.array([1.5]), 1.3
+    theta1, p1, elapsed = pl.henon_step(driven, start, p0=p_start, link=0, level=0.0,
+                                        method="rk4", t0=t0)
+    assert abs(theta1[0]) < 1e-16 and 0 < elapsed < 0.02
+    # one step of the same method in time, of the length found, lands at the same state
+    in_time = pl.step(driven, start, p0=p_start, dt=elapsed, method="rk4", t0=t0)
+    assert np.max(np.abs(np.r_[theta1 - in_time[0], p1 - in_time[1]])) < 1e-10
+    # Negative control: the drive's phase matters; starting the clock at 0 lands elsewhere.
+    _, p_wrong, _ = pl.henon_step(driven, start, p0=p_start, link=0, level=0.0, method="rk4")
+    assert abs(p_wrong[0] - p1[0]) > 1e-6

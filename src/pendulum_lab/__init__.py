@@ -16,9 +16,9 @@ Quick start
 True
 """
 
-from .integrators import METHODS, ConvergenceError, Method, get_method
+from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
 from .mechanics import Chain, derive_chain
-from .model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
 from .simulate import Trajectory, hamiltonian_field, henon_step, simulate, step, step_count
 
@@ -26,11 +26,16 @@ __version__ = "0.1.0"
 
 # Submodules that pull in heavy dependencies (ipywidgets, matplotlib) load on
 # first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
-_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "events", "mechanics",
-                    "plotting", "report", "source", "tables", "timing", "widgets"}
+_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "discrete_mechanics", "events",
+                    "geometric", "mechanics", "plotting", "report", "source", "tables", "timing",
+                    "widgets"}
 
 
 def __getattr__(name):
+    if name == "modified_hamiltonian":  # backward error analysis (notebook 14), loaded on use
+        from .geometric import modified_hamiltonian
+
+        return modified_hamiltonian
     if name in _LAZY_SUBMODULES:
         import importlib
 
@@ -38,6 +43,7 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
+    "CONFORMAL_METHODS",
     "METHODS",
     "Chain",
     "ConvergenceError",
@@ -47,9 +53,11 @@ __all__ = [
     "Trajectory",
     "derive_chain",
     "double_pendulum",
+    "driven_pendulum",
     "get_method",
     "hamiltonian_field",
     "henon_step",
+    "modified_hamiltonian",
     "n_pendulum",
     "simple_pendulum",
     "simulate",

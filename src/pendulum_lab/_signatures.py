@@ -2,16 +2,19 @@
 
 A vector field is a pair of Numba kernels that write into output arrays:
 
-``hamilton(q, p, params, dq, dp)``: ``dq = dH/dp``, ``dp = -dH/dq``;
-``acceleration(q, v, params, out)``: ``out = d^2 q/dt^2`` given velocity ``v``.
+``hamilton(t, q, p, params, dq, dp)``: ``dq = dH/dp``, ``dp = -dH/dq + Q``;
+``acceleration(t, q, v, params, out)``: ``out = d^2 q/dt^2`` given velocity ``v``.
 
-Integrators receive them as first-class functions of these exact types, so
-the compiled integrators do not depend on which vector field they integrate
-and Numba can cache them on disk.
+``t`` is the time (the drive of a forced pendulum depends on it; other
+fields ignore it) and ``Q`` the generalized forces that no Hamiltonian
+describes (damping; zero for a conservative field). Integrators receive the
+kernels as first-class functions of these exact types, so the compiled
+integrators do not depend on which vector field they integrate and Numba can
+cache them on disk.
 """
 
 from numba import types
 
 VECTOR = types.float64[::1]
-HAMILTON = types.void(VECTOR, VECTOR, VECTOR, VECTOR, VECTOR)
-ACCELERATION = types.void(VECTOR, VECTOR, VECTOR, VECTOR)
+HAMILTON = types.void(types.float64, VECTOR, VECTOR, VECTOR, VECTOR, VECTOR)
+ACCELERATION = types.void(types.float64, VECTOR, VECTOR, VECTOR, VECTOR)

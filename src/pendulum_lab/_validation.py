@@ -90,14 +90,20 @@ def choices(name: str, values, allowed) -> tuple:
     return values
 
 
-def positive_vector(name: str, values, n: int) -> tuple[float, ...]:
-    """A sequence of ``n`` finite positive numbers."""
+def _entries(name: str, values, n: int, kind: str) -> list:
+    """The ``n`` entries of a sequence, or an error naming ``name`` and what it must hold."""
     try:
         items = list(values)
     except TypeError:
-        raise TypeError(f"`{name}` must be a sequence of {n} positive numbers") from None
+        raise TypeError(f"`{name}` must be a sequence of {n} {kind}") from None
     if len(items) != n:
         raise ValueError(f"`{name}` must have {n} entries (one per link), got {len(items)}")
+    return items
+
+
+def positive_vector(name: str, values, n: int) -> tuple[float, ...]:
+    """A sequence of ``n`` finite positive numbers."""
+    items = _entries(name, values, n, "positive numbers")
     return tuple(positive_number(f"{name}[{i}]", v) for i, v in enumerate(items))
 
 
@@ -144,8 +150,8 @@ def pendulum_model(model):
 
     if not isinstance(model, PendulumModel):
         raise TypeError(
-            "`model` must be a PendulumModel (from simple_pendulum, double_pendulum or "
-            f"n_pendulum), got {type(model).__name__}"
+            "`model` must be a PendulumModel (from simple_pendulum, driven_pendulum, "
+            f"double_pendulum or n_pendulum), got {type(model).__name__}"
         )
     return model
 
@@ -194,3 +200,21 @@ def bytes_text(size: float) -> str:
             break
         size /= 1000
     return f"{size:.3g} {unit}"
+
+
+def nonnegative_number(name: str, value) -> float:
+    """``value`` as a finite float >= 0."""
+    value = real_number(name, value)
+    if value < 0:
+        raise ValueError(f"`{name}` must be non-negative (>= 0), got {value}")
+    return value
+
+
+def nonnegative_vector(name: str, values, n: int) -> tuple[float, ...]:
+    """One finite number >= 0 (then the same for all ``n`` entries) or a sequence of ``n``."""
+    if isinstance(values, numbers.Real) and not isinstance(values, bool):
+        return (nonnegative_number(name, values),) * n
+    if isinstance(values, str):
+        raise TypeError(f"`{name}` must be a number or a sequence of {n} numbers >= 0")
+    items = _entries(name, values, n, "numbers >= 0")
+    return tuple(nonnegative_number(f"{name}[{i}]", v) for i, v in enumerate(items))

@@ -470,6 +470,9 @@ def simulator(
 
 #: Default cap on the frames of :func:`html_animation` (each is an embedded PNG).
 MAX_FRAMES = 300
+# matplotlib's player links its button icons from a CDN; an animation must not load anything
+# from outside (JupyterLab and the course website have the icon font already).
+_EXTERNAL_LINK = re.compile(r"<link\b[^>]*\bhref=[\"']https?://[^>]*>\s*", re.IGNORECASE)
 
 
 class _BlittingHTMLWriter(HTMLWriter):
@@ -569,7 +572,7 @@ def html_animation(
             for index in frames:
                 scene.show(index)
                 writer.grab_frame()
-        return HTML(path.read_text(encoding="utf-8"))
+        return HTML(_EXTERNAL_LINK.sub("", path.read_text(encoding="utf-8")))
 
 
 def count_frames(html: str) -> int:

@@ -1,32 +1,54 @@
-"""One-step integrators for Hamiltonian systems, compiled with Numba.
+"""One-step integrators for vector fields, compiled with Numba.
 
 This module knows vector fields, not pendulums. A vector field is a pair of
 compiled kernels (see :mod:`pendulum_lab._signatures`):
-``hamilton(q, p, params, dq, dp)`` writes ``dq = dH/dp`` and ``dp = -dH/dq``;
-``acceleration(q, v, params, out)`` writes the acceleration for the course
-report's velocity-variable methods.
+``hamilton(t, q, p, params, dq, dp)`` writes ``dq = dH/dp`` and
+``dp = -dH/dq + Q`` (``Q``: forces no Hamiltonian describes, such as
+damping); ``acceleration(t, q, v, params, out)`` writes the acceleration for
+the course report's velocity-variable methods. ``t`` is the time, for fields
+that depend on it (a driven pendulum).
 
-Every method is a step function ``(hamilton, acceleration, q, p, h, params,
-separable) -> (q1, p1, sweeps, calls)``: ``p`` is the canonical momentum for
-all methods except the two ``*_velocity`` ones, where it is the velocity;
-``sweeps`` counts implicit-solver iterations (``-1``: did not converge) and
-``calls`` the vector-field evaluations. :func:`run` drives any of them over
+Every method is a step function ``(hamilton, acceleration, t, q, p, h,
+params, separable, damping_rate) -> (q1, p1, sweeps, calls)`` advancing from
+time ``t`` to ``t + h``: ``p`` is the canonical momentum for all methods
+except the two ``*_velocity`` ones, where it is the velocity; ``sweeps``
+counts implicit-solver iterations (``-1``: did not converge) and ``calls``
+the vector-field evaluations. ``separable`` and ``damping_rate`` describe the
+field (see :class:`HamiltonianField`). :func:`run` drives any of them over
 many steps and many initial states; it is the only time loop.
 
-Methods are data where they can be: explicit Euler and RK4 are Butcher
-tableaus run by :func:`explicit_rk`. Gauss-Legendre is a tableau whose stage
-equations are solved by fixed-point iteration. The symplectic partitioned
-methods follow the textbook formulas line by line. All implicit equations are
-iterated to round-off with one stopping rule, :func:`fixed_point_status`.
+Methods are data where they can be: a Runge-Kutta method (explicit Euler,
+RK4, Gauss-Legendre) is one registry entry made from its Butcher tableau by
+:meth:`Method.from_tableau`, which derives its order, implicitness,
+symplecticity and evaluation count (:mod:`pendulum_lab.tableau`); explicit
+tableaus are stepped by :func:`explicit_rk`, implicit ones by
+:func:`implicit_rk` (fixed-point iteration). Stage ``i`` is evaluated at
+time ``t + c_i h``. The symplectic partitioned methods follow the textbook
+formulas line by line, with the time attached to the positions (extended
+phase space: the first kick at ``t``, the last at ``t + h``); the conformal
+methods compose them with the exact flow of linear damping. All implicit
+equations are iterated to round-off with one stopping rule,
+:func:`fixed_point_status`.
+
+Which fields a method accepts (:attr:`Method.applies_to`): Runge-Kutta and
+the velocity methods integrate any field; symplectic Euler and the leapfrog
+assume a Hamiltonian one (a drive is fine: ``H`` then depends on ``t``); the
+conformal methods need damping of the form ``-gamma p`` (constant
+``gamma``). :func:`unsuitability` says why a method does not fit a field.
 
 References
 ----------
 .. [HLW] E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*,
    2nd ed., Springer 2006: symplectic Euler (Thm VI.3.3), Stormer-Verlet for
-   general H (eq. VI.3.4), Gauss collocation (Sect. II.1.3, VI.4).
+   general H (eq. VI.3.4), Gauss collocation (Sect. II.1.3, VI.4); a
+   time-dependent H is made autonomous by taking t as one more coordinate.
 .. [HMR] E. Hairer, R. I. McLachlan, A. Razakarivony, "Achieving Brouwer's
    law with implicit Runge-Kutta methods", BIT 48 (2008) 231-243: iterate the
    stage equations to round-off, or energy drifts.
+.. [MP] R. I. McLachlan, M. Perlmutter, "Conformal Hamiltonian systems",
+   J. Geom. Phys. 39 (2001) 276-300: splitting a conformal Hamiltonian field
+   into its Hamiltonian part and the linear damping keeps the exact
+   contraction of the symplectic form.
 """
 
 from __future__ import annotations
@@ -40,8 +62,10 @@ import numpy as np
 from numba import types
 
 from ._signatures import ACCELERATION, HAMILTON, VECTOR
+from .tableau import ButcherTableau, gauss_legendre_tableau
 
 __all__ = [
+    "CONFORMAL_METHODS",
     "METHODS",
     "ButcherTableau",
     "ConvergenceError",
@@ -53,7 +77,11 @@ __all__ = [
     "get_method",
     "implicit_kick",
     "implicit_rk",
+    "remove_damping",
     "run",
+    "suitable_methods",
+    "tableau_step",
+    "unsuitability",
 ]
 
 
@@ -63,99 +91,36 @@ class ConvergenceError(RuntimeError):
 
 @dataclass(frozen=True)
 class HamiltonianField:
-    """A Hamiltonian vector field as the integrators see it.
+    """A vector field as the integrators see it: Hamiltonian, possibly with damping.
 
     Attributes
     ----------
     hamilton, acceleration : compiled kernels (see :mod:`pendulum_lab._signatures`)
-    params : ndarray
-        Parameters passed through to the kernels.
+    params : ndarray, shape (P,) or (K, P)
+        Parameters passed through to the kernels; with ``K`` rows, row ``k``
+        belongs to ensemble member ``k`` (one run over many parameter values).
     separable : bool
-        True when ``dH/dq`` does not depend on ``p`` nor ``dH/dp`` on ``q``;
-        the symplectic methods are then explicit.
+        True when ``dH/dq`` does not depend on ``p`` nor ``dH/dp`` on ``q``
+        (damping aside); the symplectic methods are then explicit.
+    damping_rate : float or ndarray, shape (K,)
+        ``gamma`` when the non-Hamiltonian part of ``dp/dt`` is exactly
+        ``-gamma p`` (a conformal Hamiltonian field [MP]); ``0`` for a
+        Hamiltonian field; NaN for damping of any other form.
     """
 
     hamilton: object
     acceleration: object
     params: np.ndarray
     separable: bool
+    damping_rate: float | np.ndarray = 0.0
 
-
-# --------------------------------------------------------------------------- tableaus
-@dataclass(frozen=True)
-class ButcherTableau:
-    """A Runge-Kutta method as data; it checks itself on creation.
-
-    Checks: ``sum(b) == 1`` and row sums of ``A`` equal ``c`` (to 1e-14).
-    """
-
-    a: np.ndarray
-    b: np.ndarray
-    c: np.ndarray
-    order: int
-    explicit: bool = field(init=False)
-
-    def __post_init__(self):
-        a, b, c = (np.asarray(x, dtype=float) for x in (self.a, self.b, self.c))
-        s = b.size
-        if a.shape != (s, s) or c.shape != (s,):
-            raise ValueError(f"tableau shapes do not match: A {a.shape}, b {b.shape}, c {c.shape}")
-        if abs(b.sum() - 1.0) > 1e-14:
-            raise ValueError(f"tableau weights must sum to 1, got {b.sum()!r}")
-        if np.max(np.abs(a.sum(axis=1) - c)) > 1e-14:
-            raise ValueError("tableau row sums of A must equal c")
-        object.__setattr__(self, "a", a)
-        object.__setattr__(self, "b", b)
-        object.__setattr__(self, "c", c)
-        object.__setattr__(self, "explicit", bool(np.all(np.triu(a) == 0)))
-
-    @property
-    def stages(self) -> int:
-        return self.b.size
-
-
-EULER_TABLEAU = ButcherTableau(a=[[0.0]], b=[1.0], c=[0.0], order=1)
-RK4_TABLEAU = ButcherTableau(
-    a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]],
-    b=[1 / 6, 1 / 3, 1 / 3, 1 / 6],
-    c=[0, 0.5, 0.5, 1],
-    order=4,
-)
-
-
-def gauss_legendre_tableau(stages: int) -> ButcherTableau:
-    """The ``stages``-stage Gauss-Legendre collocation method (order ``2 stages``).
-
-    The nodes ``c`` are the zeros of the Legendre polynomial of degree
-    ``stages`` moved to [0, 1]; ``a_ij`` integrates the Lagrange polynomial
-    of node ``j`` from 0 to ``c_i`` and ``b_j`` from 0 to 1 [HLW, Sect. II.1.3].
-    """
-    x, _ = np.polynomial.legendre.leggauss(stages)
-    c = (x + 1.0) / 2.0
-    a, b = np.empty((stages, stages)), np.empty(stages)
-    for j in range(stages):
-        others = np.delete(c, j)
-        lagrange = np.polynomial.Polynomial.fromroots(others) / np.prod(c[j] - others)
-        integral = lagrange.integ()  # zero at t = 0
-        a[:, j], b[j] = integral(c), integral(1.0)
-    return ButcherTableau(a=a, b=b, c=c, order=2 * stages)
-
-
-# The course report's method (section 2.4.5): c = 1/2 -+ sqrt(3)/6, order 4.
-GAUSS4_TABLEAU = gauss_legendre_tableau(2)
-# Four stages, order 8: far fewer steps where high accuracy is wanted.
-GAUSS8_TABLEAU = gauss_legendre_tableau(4)
-# Numba freezes module-level arrays into the compiled code as constants.
-_EULER_A, _EULER_B = EULER_TABLEAU.a, EULER_TABLEAU.b
-_RK4_A, _RK4_B = RK4_TABLEAU.a, RK4_TABLEAU.b
-_GAUSS4_A, _GAUSS4_B = GAUSS4_TABLEAU.a, GAUSS4_TABLEAU.b
-_GAUSS8_A, _GAUSS8_B = GAUSS8_TABLEAU.a, GAUSS8_TABLEAU.b
 
 # --------------------------------------------------------------------------- kernel types
 HamiltonFn = types.FunctionType(HAMILTON)
 AccelerationFn = types.FunctionType(ACCELERATION)
 STEP = types.Tuple((VECTOR, VECTOR, types.int64, types.int64))(
-    HamiltonFn, AccelerationFn, VECTOR, VECTOR, types.float64, VECTOR, types.boolean
+    HamiltonFn, AccelerationFn, types.float64, VECTOR, VECTOR, types.float64, VECTOR,
+    types.boolean, types.float64,
 )
 
 
@@ -241,15 +206,16 @@ def fixed_point_status(new, old, smallest):
     return 1 if done else 0
 
 
-# --------------------------------------------------------------------------- explicit methods
+# --------------------------------------------------------------------------- Runge-Kutta methods
 @numba.njit(cache=True)
-def explicit_rk(hamilton, q, p, h, params, a, b):
-    """One step of the explicit Runge-Kutta method ``(a, b)`` for Hamilton's equations.
+def explicit_rk(hamilton, t, q, p, h, params, a, b, c):
+    """One step of the explicit Runge-Kutta method ``(a, b, c)``.
 
-    Stage ``i`` evaluates the field at ``y + h sum_{j<i} a_ij k_j``; the step
-    is ``y + h sum_i b_i k_i``. Written with element loops and one block of
-    memory for all the vectors: allocating each small array separately would
-    cost more than the arithmetic.
+    Stage ``i`` evaluates the field at time ``t + c_i h`` and state
+    ``y + h sum_{j<i} a_ij k_j``; the step is ``y + h sum_i b_i k_i``. Written
+    with element loops and one block of memory for all the vectors:
+    allocating each small array separately would cost more than the
+    arithmetic.
     """
     stages, n = b.size, q.size
     work = np.empty((2 * stages + 4, n))
@@ -261,7 +227,7 @@ def explicit_rk(hamilton, q, p, h, params, a, b):
             for j in range(i):
                 qi[m] += h * a[i, j] * kq[j, m]
                 pi[m] += h * a[i, j] * kp[j, m]
-        hamilton(qi, pi, params, kq[i], kp[i])
+        hamilton(t + c[i] * h, qi, pi, params, kq[i], kp[i])
     q1[:], p1[:] = q, p
     for i in range(stages):
         for m in range(n):
@@ -270,100 +236,13 @@ def explicit_rk(hamilton, q, p, h, params, a, b):
     return q1, p1
 
 
-@jit_step
-def explicit_euler_step(hamilton, acceleration, q, p, h, params, separable):
-    """``y1 = y + h f(y)``."""
-    q1, p1 = explicit_rk(hamilton, q, p, h, params, _EULER_A, _EULER_B)
-    return q1, p1, 0, 1
-
-
-@jit_step
-def rk4_step(hamilton, acceleration, q, p, h, params, separable):
-    """Classical RK4: four stages, weights 1/6, 1/3, 1/3, 1/6."""
-    q1, p1 = explicit_rk(hamilton, q, p, h, params, _RK4_A, _RK4_B)
-    return q1, p1, 0, 4
-
-
-# --------------------------------------------------------------------------- symplectic methods
 @numba.njit(cache=True)
-def implicit_kick(hamilton, q, p, k, params, separable, dq, dp):
-    """Solve ``p_k = p - k H_q(q, p_k)`` for ``p_k``: the implicit momentum update.
+def implicit_rk(hamilton, t, q, p, h, params, a, b, c):
+    """One step of the implicit Runge-Kutta method ``(a, b, c)``.
 
-    Starts from ``p + k dp``, so ``dp`` must hold ``-H_q(q, p)`` on entry; the
-    guess is exact when ``H`` is separable. Otherwise iterates
-    ``p_k <- p + k dp(q, p_k)`` until :func:`fixed_point_status` finds
-    round-off. ``dq``, ``dp`` are workspace. Returns ``(p_k, sweeps)``, with
-    ``sweeps = -1`` if the iteration did not converge (after ``MAX_SWEEPS``).
-    """
-    p_k = p + k * dp
-    if separable:
-        return p_k, 0
-    smallest, status, sweeps = np.full(p.size, np.inf), 0, 0
-    while status == 0 and sweeps < MAX_SWEEPS:
-        sweeps += 1
-        hamilton(q, p_k, params, dq, dp)
-        p_new = p + k * dp
-        status = fixed_point_status(p_new, p_k, smallest)
-        p_k = p_new
-    return p_k, (sweeps if status == 1 else -1)
-
-
-@jit_step
-def semi_implicit_euler_step(hamilton, acceleration, q, p, h, params, separable):
-    """Symplectic Euler for a general ``H(q, p)``:
-
-    ``p1 = p - h H_q(q, p1)``   (implicit in ``p1`` only)
-    ``q1 = q + h H_p(q, p1)``
-    """
-    dq, dp = np.empty_like(q), np.empty_like(p)
-    hamilton(q, p, params, dq, dp)
-    p1, sweeps = implicit_kick(hamilton, q, p, h, params, separable, dq, dp)
-    if sweeps < 0:
-        return q, p, -1, 1 + MAX_SWEEPS
-    hamilton(q, p1, params, dq, dp)
-    return q + h * dq, p1, sweeps, sweeps + 2
-
-
-@jit_step
-def leapfrog_step(hamilton, acceleration, q, p, h, params, separable):
-    """Stormer-Verlet for a general ``H(q, p)`` (the Lobatto IIIA-IIIB pair):
-
-    ``p_half = p - h/2 H_q(q, p_half)``                 (implicit)
-    ``q1 = q + h/2 [H_p(q, p_half) + H_p(q1, p_half)]``  (implicit)
-    ``p1 = p_half - h/2 H_q(q1, p_half)``                (explicit)
-    """
-    dq, dp = np.empty_like(q), np.empty_like(p)
-    hamilton(q, p, params, dq, dp)
-    p_half, sweeps = implicit_kick(hamilton, q, p, 0.5 * h, params, separable, dq, dp)
-    if sweeps < 0:
-        return q, p, -1, 1 + MAX_SWEEPS
-    calls = 1 + sweeps
-    hamilton(q, p_half, params, dq, dp)
-    drift = q + 0.5 * h * dq
-    q1 = q + h * dq  # exact when H is separable, else the first guess
-    calls += 1
-    if not separable:
-        smallest, status, first_sweeps = np.full(q.size, np.inf), 0, sweeps
-        while status == 0 and sweeps - first_sweeps < MAX_SWEEPS:
-            sweeps += 1
-            hamilton(q1, p_half, params, dq, dp)
-            q_new = drift + 0.5 * h * dq
-            status = fixed_point_status(q_new, q1, smallest)
-            q1 = q_new
-        calls += sweeps - first_sweeps
-        if status != 1:
-            return q, p, -1, calls
-    hamilton(q1, p_half, params, dq, dp)
-    return q1, p_half + 0.5 * h * dp, sweeps, calls + 1
-
-
-@numba.njit(cache=True)
-def implicit_rk(hamilton, q, p, h, params, a, b):
-    """One step of the implicit Runge-Kutta method ``(a, b)`` for Hamilton's equations.
-
-    The stage slopes solve ``K_i = f(y + h sum_j a_ij K_j)``; they are found
-    by fixed-point iteration from the guess ``K_i = f(y)``, each sweep
-    re-evaluating every stage at the latest slopes, until
+    The stage slopes solve ``K_i = f(t + c_i h, y + h sum_j a_ij K_j)``; they
+    are found by fixed-point iteration from the guess ``K_i = f(t, y)``, each
+    sweep re-evaluating every stage at the latest slopes, until
     :func:`fixed_point_status` finds round-off. The step is
     ``y1 = y + h sum_i b_i K_i``. Returns ``(q1, p1, sweeps, calls)``, with
     ``sweeps = -1`` if the iteration did not converge.
@@ -376,7 +255,7 @@ def implicit_rk(hamilton, q, p, h, params, a, b):
     block = np.empty(2 * 2 * stages * n)
     slopes, flat = block.reshape((2, 2, stages, n)), block.reshape((2, 2 * stages * n))
     current = 0
-    hamilton(q, p, params, slopes[current, 0, 0], slopes[current, 1, 0])
+    hamilton(t, q, p, params, slopes[current, 0, 0], slopes[current, 1, 0])
     for i in range(1, stages):
         slopes[current, :, i] = slopes[current, :, 0]
     smallest = np.full(2 * stages * n, np.inf)
@@ -392,7 +271,7 @@ def implicit_rk(hamilton, q, p, h, params, a, b):
                     sum_q += a[i, j] * slopes[current, 0, j, m]
                     sum_p += a[i, j] * slopes[current, 1, j, m]
                 stage_q[m], stage_p[m] = q[m] + h * sum_q, p[m] + h * sum_p
-            hamilton(stage_q, stage_p, params, slopes[new, 0, i], slopes[new, 1, i])
+            hamilton(t + c[i] * h, stage_q, stage_p, params, slopes[new, 0, i], slopes[new, 1, i])
         status = fixed_point_status(flat[new], flat[current], smallest)
         current = new
     calls = 1 + stages * sweeps
@@ -406,49 +285,208 @@ def implicit_rk(hamilton, q, p, h, params, a, b):
     return q1, p1, sweeps, calls
 
 
-@jit_step
-def glrk4_step(hamilton, acceleration, q, p, h, params, separable):
-    """Two-stage Gauss-Legendre collocation (order 4), solved by :func:`implicit_rk`."""
-    return implicit_rk(hamilton, q, p, h, params, _GAUSS4_A, _GAUSS4_B)
+def tableau_step(tableau: ButcherTableau, name: str) -> LazyKernel:
+    """The step function of the Runge-Kutta method ``name``, made from its tableau.
+
+    An explicit tableau is stepped by :func:`explicit_rk`, an implicit one by
+    :func:`implicit_rk`. The coefficients are closed over, so Numba compiles
+    them in as constants; the evaluation count comes from the number of
+    stages. Each method's step is named ``<name>_step``: Numba names its
+    machine code and its disk cache after the function, and closures sharing
+    one name could be mixed up when some are loaded from the cache and others
+    compiled in the same process (numba/numba#5128).
+    """
+    a, b, c, stages = tableau.a, tableau.b, tableau.c, tableau.stages
+    if tableau.explicit:
+
+        def explicit_tableau_step(hamilton, acceleration, t, q, p, h, params, separable,
+                                  damping_rate):
+            """One step of an explicit Runge-Kutta method: ``stages`` evaluations."""
+            q1, p1 = explicit_rk(hamilton, t, q, p, h, params, a, b, c)
+            return q1, p1, 0, stages
+
+        step = explicit_tableau_step
+    else:
+
+        def implicit_tableau_step(hamilton, acceleration, t, q, p, h, params, separable,
+                                  damping_rate):
+            """One step of an implicit Runge-Kutta method (stages by fixed-point iteration)."""
+            return implicit_rk(hamilton, t, q, p, h, params, a, b, c)
+
+        step = implicit_tableau_step
+    step.__name__ = step.__qualname__ = f"{name}_step"
+    return jit_step(step)
+
+
+# --------------------------------------------------------------------------- symplectic methods
+@numba.njit(cache=True)
+def remove_damping(p, damping_rate, dp):
+    """``dp += damping_rate p``: from a conformal field's ``dp/dt`` to its Hamiltonian part's.
+
+    A conformal Hamiltonian field has ``dp/dt = -H_q - gamma p`` [MP]; the
+    symplectic steps below integrate ``-H_q`` and leave the damping to the
+    conformal methods' exact flow. They call this only when ``gamma != 0``
+    (a function call per evaluation would cost Hamiltonian fields 10 %).
+    """
+    for i in range(p.size):
+        dp[i] += damping_rate * p[i]
+
+
+@numba.njit(cache=True)
+def implicit_kick(hamilton, t, q, p, k, params, separable, damping_rate, dq, dp):
+    """Solve ``p_k = p - k H_q(t, q, p_k)`` for ``p_k``: the implicit momentum update.
+
+    Starts from ``p + k dp``, so ``dp`` must hold ``-H_q(t, q, p)`` on entry
+    (see :func:`remove_damping` for ``damping_rate``);
+    the guess is exact when ``H`` is separable. Otherwise iterates
+    ``p_k <- p + k dp(t, q, p_k)`` until :func:`fixed_point_status` finds
+    round-off. ``dq``, ``dp`` are workspace. Returns ``(p_k, sweeps)``, with
+    ``sweeps = -1`` if the iteration did not converge (after ``MAX_SWEEPS``).
+    """
+    p_k = p + k * dp
+    if separable:
+        return p_k, 0
+    smallest, status, sweeps = np.full(p.size, np.inf), 0, 0
+    while status == 0 and sweeps < MAX_SWEEPS:
+        sweeps += 1
+        hamilton(t, q, p_k, params, dq, dp)
+        if damping_rate != 0.0:
+            remove_damping(p_k, damping_rate, dp)
+        p_new = p + k * dp
+        status = fixed_point_status(p_new, p_k, smallest)
+        p_k = p_new
+    return p_k, (sweeps if status == 1 else -1)
+
+
+@numba.njit(cache=True)
+def symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate):
+    """Symplectic Euler for a general ``H(t, q, p)``:
+
+    ``p1 = p - h H_q(t, q, p1)``   (implicit in ``p1`` only)
+    ``q1 = q + h H_p(t, q, p1)``
+    """
+    dq, dp = np.empty_like(q), np.empty_like(p)
+    hamilton(t, q, p, params, dq, dp)
+    if damping_rate != 0.0:
+        remove_damping(p, damping_rate, dp)
+    p1, sweeps = implicit_kick(hamilton, t, q, p, h, params, separable, damping_rate, dq, dp)
+    if sweeps < 0:
+        return q, p, -1, 1 + MAX_SWEEPS
+    hamilton(t, q, p1, params, dq, dp)  # only dq = H_p is used
+    return q + h * dq, p1, sweeps, sweeps + 2
+
+
+@numba.njit(cache=True)
+def stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate):
+    """Stormer-Verlet for a general ``H(t, q, p)`` (the Lobatto IIIA-IIIB pair):
+
+    ``p_half = p - h/2 H_q(t, q, p_half)``                          (implicit)
+    ``q1 = q + h/2 [H_p(t, q, p_half) + H_p(t + h, q1, p_half)]``   (implicit)
+    ``p1 = p_half - h/2 H_q(t + h, q1, p_half)``                    (explicit)
+    """
+    dq, dp = np.empty_like(q), np.empty_like(p)
+    hamilton(t, q, p, params, dq, dp)
+    if damping_rate != 0.0:
+        remove_damping(p, damping_rate, dp)
+    p_half, sweeps = implicit_kick(hamilton, t, q, p, 0.5 * h, params, separable, damping_rate,
+                                   dq, dp)
+    if sweeps < 0:
+        return q, p, -1, 1 + MAX_SWEEPS
+    calls = 1 + sweeps
+    hamilton(t, q, p_half, params, dq, dp)  # only dq = H_p is used
+    drift = q + 0.5 * h * dq
+    q1 = q + h * dq  # exact when H is separable, else the first guess
+    calls += 1
+    if not separable:
+        smallest, status, first_sweeps = np.full(q.size, np.inf), 0, sweeps
+        while status == 0 and sweeps - first_sweeps < MAX_SWEEPS:
+            sweeps += 1
+            hamilton(t + h, q1, p_half, params, dq, dp)
+            q_new = drift + 0.5 * h * dq
+            status = fixed_point_status(q_new, q1, smallest)
+            q1 = q_new
+        calls += sweeps - first_sweeps
+        if status != 1:
+            return q, p, -1, calls
+    hamilton(t + h, q1, p_half, params, dq, dp)
+    if damping_rate != 0.0:
+        remove_damping(p_half, damping_rate, dp)
+    return q1, p_half + 0.5 * h * dp, sweeps, calls + 1
 
 
 @jit_step
-def glrk8_step(hamilton, acceleration, q, p, h, params, separable):
-    """Four-stage Gauss-Legendre collocation (order 8), solved by :func:`implicit_rk`."""
-    return implicit_rk(hamilton, q, p, h, params, _GAUSS8_A, _GAUSS8_B)
+def semi_implicit_euler_step(hamilton, acceleration, t, q, p, h, params, separable,
+                             damping_rate):
+    """Symplectic Euler in ``(q, p)``: :func:`symplectic_euler` of the Hamiltonian."""
+    return symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate)
+
+
+@jit_step
+def leapfrog_step(hamilton, acceleration, t, q, p, h, params, separable, damping_rate):
+    """Stormer-Verlet in ``(q, p)``: :func:`stormer_verlet` of the Hamiltonian."""
+    return stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate)
+
+
+@jit_step
+def conformal_euler_step(hamilton, acceleration, t, q, p, h, params, separable, damping_rate):
+    """Conformal symplectic Euler [MP]: symplectic Euler, then the exact damping flow.
+
+    ``(q, p) <- symplectic Euler of H``;  ``p <- exp(-gamma h) p``.
+    """
+    q1, p1, sweeps, calls = symplectic_euler(hamilton, t, q, p, h, params, separable,
+                                             damping_rate)
+    return q1, math.exp(-damping_rate * h) * p1, sweeps, calls
+
+
+@jit_step
+def conformal_leapfrog_step(hamilton, acceleration, t, q, p, h, params, separable,
+                            damping_rate):
+    """Conformal Stormer-Verlet [MP]: half the damping, a leapfrog step of ``H``, half again.
+
+    ``p <- exp(-gamma h/2) p``;  ``(q, p) <- Stormer-Verlet of H``;
+    ``p <- exp(-gamma h/2) p``. The damping flow is exact and the middle step
+    symplectic, so each step contracts phase-space volume by exactly
+    ``exp(-n gamma h)``, as the true flow does; symmetric, second order.
+    """
+    contraction = math.exp(-0.5 * damping_rate * h)
+    q1, p1, sweeps, calls = stormer_verlet(hamilton, t, q, contraction * p, h, params,
+                                           separable, damping_rate)
+    return q1, contraction * p1, sweeps, calls
 
 
 # --------------------------------------------------------------------------- the report's methods
 @jit_step
-def semi_implicit_euler_velocity_step(hamilton, acceleration, q, v, h, params, separable):
-    """The course report's version on ``(q, v)``: ``v1 = v + h a(q, v)``; ``q1 = q + h v1``."""
+def semi_implicit_euler_velocity_step(hamilton, acceleration, t, q, v, h, params, separable,
+                                      damping_rate):
+    """The course report's version on ``(q, v)``: ``v1 = v + h a(t, q, v)``; ``q1 = q + h v1``."""
     a = np.empty_like(v)
-    acceleration(q, v, params, a)
+    acceleration(t, q, v, params, a)
     v1 = v + h * a
     return q + h * v1, v1, 0, 1
 
 
 @jit_step
-def leapfrog_velocity_step(hamilton, acceleration, q, v, h, params, separable):
+def leapfrog_velocity_step(hamilton, acceleration, t, q, v, h, params, separable, damping_rate):
     """The course report's leapfrog on ``(q, v)``, written as kick-drift-kick:
 
-    ``v_half = v + h/2 a(q, v)``; ``q1 = q + h v_half``; ``v1 = v_half + h/2 a(q1, v_half)``.
+    ``v_half = v + h/2 a(t, q, v)``; ``q1 = q + h v_half``;
+    ``v1 = v_half + h/2 a(t + h, q1, v_half)``.
     Second order only when ``a`` does not depend on ``v``.
     """
     a = np.empty_like(v)
-    acceleration(q, v, params, a)
+    acceleration(t, q, v, params, a)
     v_half = v + 0.5 * h * a
     q1 = q + h * v_half
-    acceleration(q1, v_half, params, a)
+    acceleration(t + h, q1, v_half, params, a)
     return q1, v_half + 0.5 * h * a, 0, 2
 
 
 # --------------------------------------------------------------------------- the time loop
 MATRIX = types.float64[:, ::1]
 RUN = types.void(
-    types.FunctionType(STEP), HamiltonFn, AccelerationFn, types.boolean, MATRIX, MATRIX,
-    types.float64, types.int64, types.int64, types.int64, VECTOR, types.float64[:, :, ::1],
-    types.float64[:, :, ::1], types.int64[:, ::1],
+    types.FunctionType(STEP), HamiltonFn, AccelerationFn, types.boolean, VECTOR, MATRIX, MATRIX,
+    types.float64, types.float64, types.int64, types.int64, types.int64, MATRIX,
+    types.float64[:, :, ::1], types.float64[:, :, ::1], types.int64[:, ::1],
 )
 #: Codes in ``stats[:, STATUS]`` after :func:`run`.
 RUNNING, NOT_FINITE, NOT_CONVERGED = 0, 1, 2
@@ -464,24 +502,31 @@ def _all_finite(x):
     return True
 
 
-def _run(step, hamilton, acceleration, separable, q, p, h, n_steps, first_step, save_every,
-        params, saved_q, saved_p, stats):
+def _run(step, hamilton, acceleration, separable, damping_rates, q, p, t0, h, n_steps,
+         first_step, save_every, params, saved_q, saved_p, stats):
     """Advance every row of ``(q, p)`` (shape ``(K, n)``) by ``n_steps`` steps, in place.
 
     Steps are numbered globally from ``first_step + 1`` so that a long run can
-    be made of several calls (for a progress bar); step ``s`` of row ``k`` is
-    stored in ``saved_q[k, s // save_every]`` when ``save_every`` divides it. ``stats[k]``
-    accumulates (steps done, solver sweeps, vector-field calls, status); a
-    row stops at a non-finite state or a solver failure, keeping its status.
-    Rows are independent; the caller may run slices of them in parallel
-    threads (the kernel releases the GIL).
+    be made of several calls (for a progress bar); step ``s`` goes from time
+    ``t0 + (s - 1) h`` to ``t0 + s h`` (computed from ``s``, not summed), and
+    row ``k``'s state after it is stored in ``saved_q[k, s // save_every]``
+    when ``save_every`` divides ``s``. ``params`` (shape ``(1, P)`` or
+    ``(K, P)``) and ``damping_rates`` (shape ``(1,)`` or ``(K,)``) are shared
+    or per row. ``stats[k]`` accumulates (steps done, solver sweeps,
+    vector-field calls, status); a row stops at a non-finite state or a solver
+    failure, keeping its status. Rows are independent; the caller may run
+    slices of them in parallel threads (the kernel releases the GIL).
     """
+    shared = params.shape[0] == 1
     for k in range(q.shape[0]):
         if stats[k, STATUS] != RUNNING:
             continue
+        row = 0 if shared else k
+        row_params, damping_rate = params[row], damping_rates[row]
         qk, pk = q[k].copy(), p[k].copy()
         for s in range(first_step + 1, first_step + n_steps + 1):
-            q1, p1, sweeps, calls = step(hamilton, acceleration, qk, pk, h, params, separable)
+            q1, p1, sweeps, calls = step(hamilton, acceleration, t0 + (s - 1) * h, qk, pk, h,
+                                         row_params, separable, damping_rate)
             stats[k, CALLS] += calls
             if sweeps < 0:
                 stats[k, STATUS] = NOT_CONVERGED
@@ -502,9 +547,16 @@ run = LazyKernel(RUN, _run, cache=True, nogil=True)
 
 
 # --------------------------------------------------------------------------- registry
+#: Values of :attr:`Method.applies_to`.
+ANY_FIELD, HAMILTONIAN_FIELD, CONFORMAL_FIELD = "any", "hamiltonian", "conformal"
+
+
 @dataclass(frozen=True)
 class Method:
     """An integrator: its properties and its compiled one-step map.
+
+    Build a Runge-Kutta method with :meth:`from_tableau`, which derives every
+    property from the tableau.
 
     Attributes
     ----------
@@ -512,7 +564,8 @@ class Method:
     order : int
         Classical order of accuracy.
     symplectic : bool
-        Symplectic for every Hamiltonian (in the variables it works in).
+        Symplectic for every Hamiltonian (in the variables it works in); for
+        the conformal methods: conformal symplectic on damped fields.
     implicit : bool
         Solves equations at each step (for non-separable ``H``).
     variables : {"canonical", "velocity"}
@@ -522,6 +575,11 @@ class Method:
     kernel : LazyKernel
         The step function (see the module docstring); ``kernel.py_func`` is
         its Python source, ``kernel.compiled`` the machine code.
+    applies_to : {"any", "hamiltonian", "conformal"}
+        The fields it integrates: any; Hamiltonian ones (``damping_rate``
+        zero); conformal ones (``damping_rate`` finite, zero included).
+    tableau : ButcherTableau or None
+        The Butcher tableau of a Runge-Kutta method.
     """
 
     name: str
@@ -531,35 +589,68 @@ class Method:
     variables: str
     summary: str
     kernel: object = field(repr=False)
+    applies_to: str = ANY_FIELD
+    tableau: ButcherTableau | None = field(default=None, repr=False)
+
+    @classmethod
+    def from_tableau(cls, name: str, tableau: ButcherTableau, summary: str) -> Method:
+        """The Runge-Kutta method of ``tableau`` on ``(q, p)``; nothing typed but the name.
+
+        Order, implicitness and symplecticity come from the tableau
+        (:class:`~pendulum_lab.tableau.ButcherTableau`), the step function from
+        :func:`tableau_step`. A Runge-Kutta method integrates any field.
+        """
+        return cls(name, tableau.order, tableau.symplectic_condition().holds,
+                   not tableau.explicit, "canonical", summary, tableau_step(tableau, name),
+                   tableau=tableau)
 
     def __str__(self) -> str:
         return self.name
 
 
-METHODS: dict[str, Method] = {
-    m.name: m
-    for m in [
-        Method("explicit_euler", 1, False, False, "canonical",
-               "explicit Euler: y1 = y + h f(y)", explicit_euler_step),
-        Method("semi_implicit_euler", 1, True, True, "canonical",
-               "symplectic Euler in (theta, p): implicit in p1 unless H is separable",
-               semi_implicit_euler_step),
-        Method("leapfrog", 2, True, True, "canonical",
-               "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step),
-        Method("rk4", 4, False, False, "canonical",
-               "classical fourth-order Runge-Kutta", rk4_step),
-        Method("glrk4", 4, True, True, "canonical",
-               "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)", glrk4_step),
-        Method("glrk8", 8, True, True, "canonical",
-               "four-stage Gauss-Legendre collocation (order 8, implicit)", glrk8_step),
-        Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
-               "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
-               semi_implicit_euler_velocity_step),
-        Method("leapfrog_velocity", 2, False, False, "velocity",
-               "the report's leapfrog on (theta, omega): not symplectic for n >= 2",
-               leapfrog_velocity_step),
-    ]
+_REGISTRY = [
+    Method.from_tableau("explicit_euler", ButcherTableau(a=[[0.0]], b=[1.0]),
+                        "explicit Euler: y1 = y + h f(y)"),
+    Method("semi_implicit_euler", 1, True, True, "canonical",
+           "symplectic Euler in (theta, p): implicit in p1 unless H is separable",
+           semi_implicit_euler_step, applies_to=HAMILTONIAN_FIELD),
+    Method("leapfrog", 2, True, True, "canonical",
+           "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step,
+           applies_to=HAMILTONIAN_FIELD),
+    Method.from_tableau("rk4", ButcherTableau(a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0],
+                                                 [0, 0, 1, 0]], b=[1 / 6, 1 / 3, 1 / 3, 1 / 6]),
+                        "classical fourth-order Runge-Kutta"),
+    # The course report's method (section 2.4.5): c = 1/2 -+ sqrt(3)/6, order 4.
+    Method.from_tableau("glrk4", gauss_legendre_tableau(2),
+                        "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)"),
+    # Four stages, order 8: far fewer steps where high accuracy is wanted.
+    Method.from_tableau("glrk8", gauss_legendre_tableau(4),
+                        "four-stage Gauss-Legendre collocation (order 8, implicit)"),
+    Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
+           "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
+           semi_implicit_euler_velocity_step),
+    Method("leapfrog_velocity", 2, False, False, "velocity",
+           "the report's leapfrog on (theta, omega): not symplectic for n >= 2",
+           leapfrog_velocity_step),
+    Method("conformal_euler", 1, True, True, "canonical",
+           "conformal symplectic Euler: symplectic Euler, then the exact linear damping",
+           conformal_euler_step, applies_to=CONFORMAL_FIELD),
+    Method("conformal_leapfrog", 2, True, True, "canonical",
+           "conformal Stormer-Verlet: exact damping for h/2, leapfrog, damping for h/2",
+           conformal_leapfrog_step, applies_to=CONFORMAL_FIELD),
+]
+#: The methods for Hamiltonian systems, compared throughout the course.
+METHODS: dict[str, Method] = {m.name: m for m in _REGISTRY if m.applies_to != CONFORMAL_FIELD}
+#: The methods for damped (conformal Hamiltonian) systems; on a Hamiltonian
+#: field they are symplectic Euler and the leapfrog.
+CONFORMAL_METHODS: dict[str, Method] = {
+    m.name: m for m in _REGISTRY if m.applies_to == CONFORMAL_FIELD
 }
+# The tableaus by name, for notebooks and tests (the registry holds them).
+EULER_TABLEAU = METHODS["explicit_euler"].tableau
+RK4_TABLEAU = METHODS["rk4"].tableau
+GAUSS4_TABLEAU = METHODS["glrk4"].tableau
+GAUSS8_TABLEAU = METHODS["glrk8"].tableau
 
 MAIN_METHODS = ("explicit_euler", "semi_implicit_euler", "leapfrog", "rk4", "glrk4")
 
@@ -570,7 +661,29 @@ def get_method(method) -> Method:
         return method
     if not isinstance(method, str):
         raise TypeError(f"`method` must be a method name (str), got {type(method).__name__}")
-    try:
-        return METHODS[method]
-    except KeyError:
-        raise ValueError(f"`method` must be one of {list(METHODS)}, got {method!r}") from None
+    for registry in (METHODS, CONFORMAL_METHODS):
+        if method in registry:
+            return registry[method]
+    names = [*METHODS, *CONFORMAL_METHODS]
+    raise ValueError(f"`method` must be one of {names}, got {method!r}")
+
+
+def unsuitability(method: Method, damping_rate) -> str | None:
+    """Why ``method`` cannot integrate a field with this ``damping_rate``, or None if it can.
+
+    ``damping_rate`` is a :attr:`HamiltonianField.damping_rate` (a float or
+    one per ensemble member).
+    """
+    rates = np.asarray(damping_rate, dtype=float)
+    if method.applies_to == HAMILTONIAN_FIELD and np.any(rates != 0):
+        return (f"{method.name} assumes a Hamiltonian vector field, and damping is not "
+                "Hamiltonian (its guesses and its symplecticity rely on dp/dt = -H_q)")
+    if method.applies_to == CONFORMAL_FIELD and not np.all(np.isfinite(rates)):
+        return (f"{method.name} needs damping of the conformal form dp/dt = -H_q - gamma p "
+                "with a constant gamma")
+    return None
+
+
+def suitable_methods(damping_rate) -> list[str]:
+    """Names of the registered methods that integrate a field with this ``damping_rate``."""
+    return [m.name for m in _REGISTRY if unsuitability(m, damping_rate) is None]

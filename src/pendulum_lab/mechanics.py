@@ -18,7 +18,18 @@ Lagrangian, the Euler-Lagrange equations in the form ``M(q) q'' = F(q, q')``,
 the canonical momenta ``p = M(q) q'``, the Hamiltonian by Legendre transform,
 Hamilton's equations, and the equilibria with their Jacobians.
 
-Masses, lengths and ``g`` stay symbolic. Nothing here inverts ``M``
+A *forced* chain (``Chain(n, forced=True)``) also has generalized forces
+``Q`` that are not derived from a potential: a viscous damping torque at every
+joint, from Rayleigh's dissipation function
+``R = 1/2 sum_i c_i (omega_i - omega_(i-1))^2`` (``omega_0 = 0``: the pivot),
+and a periodic drive torque ``A cos(Omega t)`` at the pivot, on the first
+link. They enter the Euler-Lagrange equations as ``M q'' = F + Q`` with
+``Q = -dR/domega + (A cos(Omega t), 0, ..., 0)``; with absolute angles the
+damping part is ``-C omega`` with ``C`` tridiagonal. The conservative chain
+is the special case ``c_i = A = 0``; it is derived separately so that its
+expressions carry no zero terms.
+
+Masses, lengths, ``g`` and the force parameters stay symbolic. Nothing here inverts ``M``
 symbolically unless asked to (:attr:`Chain.hamiltonian` does, lazily): the
 numeric layer solves ``M x = b`` numerically, as PyDy's code generator does.
 
@@ -27,7 +38,15 @@ Notes
 State order everywhere: ``q = (theta_1, ..., theta_n)``,
 ``omega = (omega_1, ..., omega_n)`` with ``omega_i = d theta_i / dt``, and
 ``p = (p_1, ..., p_n)``. For ``n = 1`` the symbols carry no index
-(``theta``, ``omega``, ``p``, ``m``, ``l``).
+(``theta``, ``omega``, ``p``, ``m``, ``l``, ``c``). Parameters, in the order
+the numeric layers pass them: ``m_1..m_n, l_1..l_n, g``, then for a forced
+chain ``c_1..c_n, A, Omega``.
+
+References
+----------
+.. [G] H. Goldstein, C. Poole, J. Safko, *Classical Mechanics*, 3rd ed.,
+   Addison-Wesley 2002, Sect. 1.5 (generalized forces, Rayleigh's
+   dissipation function).
 """
 
 from __future__ import annotations
@@ -107,6 +126,18 @@ class Chain:
     ----------
     n : int
         Number of links, ``n >= 1``.
+    forced : bool
+        Add the generalized forces: damping at each joint and a drive at the
+        pivot (see the module docstring).
+
+    Attributes
+    ----------
+    parameters : tuple of sympy.Symbol
+        ``(m_1..m_n, l_1..l_n, g)``, then ``(c_1..c_n, A, Omega)`` if forced.
+    generalized_forces : sympy.Matrix, shape (n, 1)
+        ``Q(omega, t)``, zero for the conservative chain.
+    forcing : sympy.Matrix, shape (n, 1)
+        The right-hand side of ``M(q) alpha = forcing``, ``Q`` included.
 
     Examples
     --------
@@ -115,14 +146,19 @@ class Chain:
     Matrix([[l**2*m]])
     >>> chain.forcing
     Matrix([[-g*l*m*sin(theta)]])
+    >>> derive_chain(1, forced=True).forcing
+    Matrix([[A*cos(Omega*t) - c*omega - g*l*m*sin(theta)]])
     """
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, forced: bool = False):
         if isinstance(n, bool) or not isinstance(n, int):
             raise TypeError(f"`n` must be an integer >= 1, got {n!r}")
         if n < 1:
             raise ValueError(f"`n` must be an integer >= 1, got {n}")
+        if not isinstance(forced, bool):
+            raise TypeError(f"`forced` must be True or False, got {forced!r}")
         self.n = n
+        self.forced = forced
         self.q = sp.Matrix(sp.symbols(_names(r"theta", n), real=True))
         self.omega = sp.Matrix(sp.symbols(_names(r"omega", n), real=True))
         self.omega_dot = sp.Matrix(sp.symbols(_names(r"alpha", n), real=True))
@@ -130,6 +166,7 @@ class Chain:
         self.masses = sp.Matrix(sp.symbols(_names("m", n), positive=True))
         self.lengths = sp.Matrix(sp.symbols(_names("l", n), positive=True))
         self.g = sp.Symbol("g", positive=True)
+        self.t = sp.Symbol("t", real=True)
         self.parameters = (*self.masses, *self.lengths, self.g)
 
         # Cartesian bob positions, pivot at the origin, y pointing up.
@@ -164,14 +201,42 @@ class Chain:
         # d/dt dL/domega_i = sum_j d2L/domega_i dq_j omega_j + sum_j M_ij omega_j'.
         dl_dq = sp.Matrix([self.lagrangian.diff(qi) for qi in self.q])
         dl_dw = sp.Matrix([self.lagrangian.diff(wi) for wi in self.omega])
-        self.forcing = sp.expand(dl_dq - dl_dw.jacobian(self.q) * self.omega)
         self.dlagrangian_dq = dl_dq
         self.momenta = mass * self.omega
+        conservative = sp.expand(dl_dq - dl_dw.jacobian(self.q) * self.omega)
+
+        # Generalized forces. Joint i joins link i-1 (the pivot for i = 1) to
+        # link i; its damping torque -c_i (omega_i - omega_(i-1)) acts on link i
+        # and, reversed, on link i-1: Q = -dR/domega.
+        self.dissipation = sp.Integer(0)
+        self.generalized_forces = sp.zeros(n, 1)
+        if forced:
+            self.damping = sp.Matrix(sp.symbols(_names("c", n), nonnegative=True))
+            self.drive_amplitude = sp.Symbol("A", real=True)
+            self.drive_frequency = sp.Symbol("Omega", positive=True)
+            self.parameters += (*self.damping, self.drive_amplitude, self.drive_frequency)
+            relative = [self.omega[i] - (self.omega[i - 1] if i else 0) for i in range(n)]
+            self.dissipation = sum(c * w**2 for c, w in zip(self.damping, relative)) / 2
+            drive = sp.zeros(n, 1)
+            drive[0] = self.drive_amplitude * sp.cos(self.drive_frequency * self.t)
+            self.generalized_forces = sp.expand(
+                drive - sp.Matrix([self.dissipation.diff(w) for w in self.omega])
+            )
+        self.forcing = sp.expand(conservative + self.generalized_forces)
+
+    @property
+    def damping_matrix(self) -> sp.Matrix:
+        """``C = d^2 R / domega^2``, shape (n, n): the damping force is ``-C omega``.
+
+        Tridiagonal, ``C_ii = c_i + c_(i+1)``, ``C_(i,i+1) = -c_(i+1)``; zero for
+        the conservative chain.
+        """
+        return sp.hessian(self.dissipation, list(self.omega)) if self.forced else sp.zeros(self.n)
 
     # ---- derived on demand (these can be slow for n >= 3) ---------------------
     @property
     def euler_lagrange(self) -> sp.Eq:
-        """The equations of motion ``M(q) alpha = F(q, omega)``, ``alpha = omega'``."""
+        """The equations of motion ``M(q) alpha = F(q, omega) (+ Q)``, ``alpha = omega'``."""
         return sp.Eq(self.mass_matrix * self.omega_dot, self.forcing)
 
     @functools.cached_property
@@ -193,17 +258,23 @@ class Chain:
 
     @functools.cached_property
     def hamiltonian(self) -> sp.Expr:
-        """``H(q, p) = 1/2 p^T M(q)^-1 p + V(q)``, the Legendre transform of L."""
+        """``H(q, p) = 1/2 p^T M(q)^-1 p + V(q)``, the Legendre transform of L.
+
+        For a forced chain this is still the mechanical energy; the forces do
+        work on it at the rate ``omega . Q``.
+        """
         return (self.p.T * self.inverse_mass_matrix * self.p)[0, 0] / 2 + self.potential
 
     @functools.cached_property
     def hamilton_equations(self) -> tuple[sp.Matrix, sp.Matrix]:
-        """``(dq/dt, dp/dt) = (dH/dp, -dH/dq)`` as two column matrices."""
+        """``(dq/dt, dp/dt) = (dH/dp, -dH/dq + Q)`` as two column matrices.
+
+        ``Q`` (zero unless forced) is written in ``p`` through ``omega = dH/dp``.
+        """
         h = self.hamiltonian
-        return (
-            sp.Matrix([h.diff(pi) for pi in self.p]),
-            sp.Matrix([-h.diff(qi) for qi in self.q]),
-        )
+        dq = sp.Matrix([h.diff(pi) for pi in self.p])
+        forces = self.generalized_forces.xreplace(dict(zip(self.omega, dq)))
+        return dq, sp.Matrix([-h.diff(qi) for qi in self.q]) + forces
 
     def legendre_transform(self) -> sp.Expr:
         """``omega . p - L`` written in ``(q, omega)``; it equals ``T + V``."""
@@ -218,6 +289,11 @@ class Chain:
         ``sin(theta_i) = 0``; the Jacobian there is ``[[0, I], [M^-1 dF/dq, 0]]``
         because ``F`` is quadratic in ``omega`` and zero at the equilibrium.
         """
+        if self.forced:
+            raise ValueError(
+                "the equilibria are those of the unforced chain, derive_chain(n): with a drive "
+                "there are none, and damping only changes their Jacobians"
+            )
         n = self.n
         result = []
         for ups in itertools.product((False, True), repeat=n):
@@ -253,7 +329,7 @@ class Chain:
         return rhs.jacobian(sp.Matrix([*self.q, *self.omega]))
 
     def __repr__(self) -> str:
-        return f"Chain(n={self.n})"
+        return f"Chain(n={self.n}, forced=True)" if self.forced else f"Chain(n={self.n})"
 
 
 def is_identically_zero(expr: sp.Expr) -> bool:
@@ -289,12 +365,14 @@ def is_identically_zero(expr: sp.Expr) -> bool:
 
 
 @functools.cache
-def _derive(n: int) -> Chain:
-    return Chain(n)
+def _derive(n: int, forced: bool) -> Chain:
+    return Chain(n, forced)
 
 
-def derive_chain(n: int) -> Chain:
-    """Derive (once per ``n``, then cached) the symbolic equations of ``n`` links."""
+def derive_chain(n: int, forced: bool = False) -> Chain:
+    """Derive (once per ``n`` and ``forced``, then cached) the symbolic equations of ``n`` links."""
     if isinstance(n, bool) or not isinstance(n, int):
         raise TypeError(f"`n` must be an integer >= 1, got {n!r}")
-    return _derive(n)
+    if not isinstance(forced, bool):
+        raise TypeError(f"`forced` must be True or False, got {forced!r}")
+    return _derive(n, forced)

@@ -2,9 +2,16 @@
 
 Every numeric function here is lambdified from :mod:`pendulum_lab.mechanics`
 once per number of links (with ``cse=True`` and the parameters as arguments),
-so models that differ only in masses, lengths or ``g`` share the compiled code
-and building one is cheap. All functions accept a batch of states: arrays of
-shape ``(..., n)``, so one code path serves one trajectory and an ensemble.
+so models that differ only in masses, lengths, ``g`` or forces share the
+compiled code and building one is cheap. All functions accept a batch of
+states: arrays of shape ``(..., n)``, so one code path serves one trajectory
+and an ensemble.
+
+A model with damping or a drive (``driven_pendulum``, or the ``damping``,
+``drive_amplitude``, ``drive_frequency`` arguments of the other factories)
+uses the forced chain of :mod:`pendulum_lab.mechanics`; without them it is the
+conservative chain, unchanged. Functions of a driven model's equations take
+the time ``t``.
 """
 
 from __future__ import annotations
@@ -17,7 +24,7 @@ import sympy as sp
 from . import _validation as check
 from .mechanics import Chain, derive_chain
 
-__all__ = ["PendulumModel", "double_pendulum", "n_pendulum", "simple_pendulum"]
+__all__ = ["PendulumModel", "double_pendulum", "driven_pendulum", "n_pendulum", "simple_pendulum"]
 
 
 def _lambdify(args, exprs, shape):
@@ -47,7 +54,10 @@ class _CompiledChain:
         lag_dq = chain.dlagrangian_dq
         lag_dw = sp.Matrix([chain.lagrangian.diff(wi) for wi in w])
         self.mass_matrix = _lambdify(config_args, chain.mass_matrix, (n, n))
-        self.forcing = _lambdify(state_args, chain.forcing, (n,))
+        # The time comes last; the conservative forcing does not use it.
+        self.forcing = _lambdify((*state_args, chain.t), chain.forcing, (n,))
+        self.generalized_forces = _lambdify((*state_args, chain.t), chain.generalized_forces, (n,))
+        self.damping_matrix = sp.lambdify(chain.parameters, chain.damping_matrix)
         self.dlagrangian_dq = _lambdify(state_args, lag_dq, (n,))
         self.kinetic = _lambdify(state_args, [chain.kinetic], ())
         self.potential = _lambdify(config_args, [chain.potential], ())
@@ -60,8 +70,8 @@ class _CompiledChain:
 
 
 @functools.cache
-def _compiled(n: int) -> _CompiledChain:
-    return _CompiledChain(derive_chain(n))
+def _compiled(n: int, forced: bool) -> _CompiledChain:
+    return _CompiledChain(derive_chain(n, forced))
 
 
 def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
@@ -85,31 +95,111 @@ def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 
 
 class PendulumModel:
-    """A planar chain of ``n`` pendulums with numeric masses, lengths and ``g``.
+    """A planar chain of ``n`` pendulums with numeric masses, lengths, ``g`` and forces.
 
-    Build one with :func:`simple_pendulum`, :func:`double_pendulum` or
-    :func:`n_pendulum`. Angles are absolute, measured from the downward
-    vertical; ``theta``, ``omega`` (angular velocities) and ``p`` (canonical
-    momenta) are arrays of shape ``(n,)`` or ``(..., n)``.
+    Build one with :func:`simple_pendulum`, :func:`driven_pendulum`,
+    :func:`double_pendulum` or :func:`n_pendulum`. Angles are absolute,
+    measured from the downward vertical; ``theta``, ``omega`` (angular
+    velocities) and ``p`` (canonical momenta) are arrays of shape ``(n,)`` or
+    ``(..., n)``.
+
+    Parameters
+    ----------
+    n : int
+    masses, lengths : sequence of n positive floats
+    g : float
+    damping : float or sequence of n floats >= 0
+        Viscous damping coefficient of each joint [N m s/rad]: joint ``i``
+        exerts the torque ``-damping_i (omega_i - omega_(i-1))`` (joint 1 ties
+        link 1 to the pivot). One number applies to every joint.
+    drive_amplitude : float
+        Amplitude ``A`` of the drive torque ``A cos(drive_frequency t)`` on
+        the first link, at the pivot [N m].
+    drive_frequency : float > 0, optional
+        Angular frequency of the drive [rad/s]; needed when
+        ``drive_amplitude != 0``.
 
     Attributes
     ----------
     n : int
         Number of links.
-    masses, lengths : tuple of float
-    g : float
+    masses, lengths, damping : tuple of float
+    g, drive_amplitude : float
+    drive_frequency : float or None
     chain : pendulum_lab.mechanics.Chain
-        The symbolic equations (parameters symbolic).
+        The symbolic equations (parameters symbolic); the forced chain when
+        there is damping or a drive.
     """
 
-    def __init__(self, n: int, masses, lengths, g: float):
+    def __init__(self, n: int, masses, lengths, g: float, *, damping=0.0,
+                 drive_amplitude: float = 0.0, drive_frequency: float | None = None):
         self.n = check.integer_at_least("n", n, 1)
         self.masses = check.positive_vector("masses", masses, self.n)
         self.lengths = check.positive_vector("lengths", lengths, self.n)
         self.g = check.real_number("g", g)
-        self.chain = derive_chain(self.n)
-        self._fn = _compiled(self.n)
+        self.damping = check.nonnegative_vector("damping", damping, self.n)
+        self.drive_amplitude = check.real_number("drive_amplitude", drive_amplitude)
+        self.drive_frequency = (None if drive_frequency is None
+                                else check.positive_number("drive_frequency", drive_frequency))
+        if self.drive_amplitude != 0 and self.drive_frequency is None:
+            raise ValueError("`drive_frequency` must be given (> 0) when `drive_amplitude` != 0")
+        self.forced = not (self.is_conservative and self.is_autonomous)
+        self.chain = derive_chain(self.n, self.forced)
+        self._fn = _compiled(self.n, self.forced)
         self._params = (*self.masses, *self.lengths, self.g)
+        if self.forced:
+            self._params += (*self.damping, self.drive_amplitude, self.drive_frequency or 0.0)
+
+    # ---- forces ------------------------------------------------------------
+    @property
+    def is_conservative(self) -> bool:
+        """No damping: the mechanical energy changes only by the drive's work."""
+        return not any(self.damping)
+
+    @property
+    def is_autonomous(self) -> bool:
+        """No drive: the equations do not depend on time."""
+        return self.drive_amplitude == 0
+
+    @property
+    def drive_period(self) -> float | None:
+        """``2 pi / drive_frequency`` [s], or None without a drive frequency."""
+        return None if self.drive_frequency is None else 2 * np.pi / self.drive_frequency
+
+    @property
+    def conformal_damping_rate(self) -> float | None:
+        """``gamma`` when damping makes ``dp/dt = -H_q - gamma p`` (a conformal field), else None.
+
+        Zero without damping. For one link the damping torque ``-c omega``
+        is ``-(c / (m l^2)) p``: conformal, with ``gamma = c / (m l^2)``. For
+        ``n >= 2`` joint damping gives ``dp/dt = -H_q - C M(theta)^-1 p``,
+        whose rate depends on ``theta``: not conformal, so None.
+        """
+        if self.is_conservative:
+            return 0.0
+        if self.n > 1:
+            return None
+        # one link: M = m l^2 is constant
+        return self.damping[0] / float(self.mass_matrix_at([0.0])[0, 0])
+
+    def replace(self, **changes) -> PendulumModel:
+        """A copy with some constructor arguments changed (``masses``, ``lengths``, ``g``,
+        ``damping``, ``drive_amplitude``, ``drive_frequency``).
+
+        Examples
+        --------
+        >>> import pendulum_lab as pl
+        >>> pl.driven_pendulum().replace(drive_amplitude=1.5).drive_amplitude
+        1.5
+        """
+        arguments = dict(masses=self.masses, lengths=self.lengths, g=self.g,
+                         damping=self.damping, drive_amplitude=self.drive_amplitude,
+                         drive_frequency=self.drive_frequency)
+        unknown = set(changes) - set(arguments)
+        if unknown:
+            raise ValueError(f"cannot replace {sorted(unknown)}: the arguments are "
+                             f"{list(arguments)}")
+        return PendulumModel(self.n, **(arguments | changes))
 
     # ---- symbolic views (parameters symbolic) -----------------------------
     @property
@@ -147,13 +237,45 @@ class PendulumModel:
     def _config(self, theta):
         return (*np.moveaxis(np.asarray(theta, float), -1, 0), *self._params)
 
+    def _time(self, t):
+        """``t`` as floats; it may be left out only when the equations do not depend on it."""
+        if t is None:
+            if not self.is_autonomous:
+                raise ValueError("`t` is required: the model is driven, so its equations "
+                                 "depend on the time")
+            return 0.0
+        t = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(t)):
+            raise ValueError("`t` must be finite")
+        return t
+
     def mass_matrix_at(self, theta) -> np.ndarray:
         """``M(theta)``, shape ``(..., n, n)``."""
         return self._fn.mass_matrix(*self._config(theta))
 
-    def accelerations(self, theta, omega) -> np.ndarray:
-        """``omega' = M(theta)^-1 F(theta, omega)``, shape ``(..., n)``."""
-        return solve_small(self.mass_matrix_at(theta), self._fn.forcing(*self._state(theta, omega)))
+    def accelerations(self, theta, omega, t=None) -> np.ndarray:
+        """``omega' = M(theta)^-1 (F(theta, omega) + Q(omega, t))``, shape ``(..., n)``.
+
+        ``t`` (a float, or an array of the batch shape ``...``) is needed for a
+        driven model only.
+        """
+        forcing = self._fn.forcing(*self._state(theta, omega), self._time(t))
+        return solve_small(self.mass_matrix_at(theta), forcing)
+
+    def generalized_forces(self, theta, omega, t=None) -> np.ndarray:
+        """``Q(omega, t)``: joint damping and drive torques, shape ``(..., n)``; 0 if unforced."""
+        return self._fn.generalized_forces(*self._state(theta, omega), self._time(t))
+
+    def vector_field(self, theta, p, t=None) -> tuple[np.ndarray, np.ndarray]:
+        """``(dtheta/dt, dp/dt) = (dH/dp, -dH/dq + Q)`` in canonical variables, each ``(..., n)``.
+
+        The right-hand side every integrator integrates (the compiled kernels
+        compute the same). ``t`` is needed for a driven model only.
+        """
+        omega = self.velocities(theta, p)
+        args = self._state(theta, omega)
+        return omega, self._fn.dlagrangian_dq(*args) + self._fn.generalized_forces(
+            *args, self._time(t))
 
     def momenta(self, theta, omega) -> np.ndarray:
         """``p = M(theta) omega``."""
@@ -175,7 +297,8 @@ class PendulumModel:
 
     # Hamilton's equations in canonical variables. dH/dq at fixed p equals
     # -dL/dq at omega = M^-1 p (a property of the Legendre transform), which
-    # avoids differentiating a symbolic inverse.
+    # avoids differentiating a symbolic inverse. H is the mechanical energy:
+    # the forces Q of a forced model are not in it (see vector_field).
     def dH_dp(self, theta, p) -> np.ndarray:
         return self.velocities(theta, p)
 
@@ -186,22 +309,26 @@ class PendulumModel:
         """``H(theta, p)`` evaluated numerically."""
         return self.energy(theta, self.velocities(theta, p))
 
-    def jacobian(self, theta, p) -> np.ndarray:
-        """Jacobian of ``(dH/dp, -dH/dq)`` with respect to ``(theta, p)``, shape ``(..., 2n, 2n)``.
+    def jacobian(self, theta, p, t=None) -> np.ndarray:
+        """Jacobian of :meth:`vector_field` with respect to ``(theta, p)``, shape ``(..., 2n, 2n)``.
 
         With ``omega = M^-1 p``: ``d omega/dp = M^-1``,
         ``d omega/dq = -M^-1 d(M omega)/dq``, and ``-dH/dq = dL/dq(q, omega)``
-        differentiates by the chain rule.
+        differentiates by the chain rule. The damping force ``-C omega`` adds
+        ``-C`` to ``d(dp/dt)/d omega``; the drive depends on ``t`` only.
         """
+        self._time(t)  # a driven model's field depends on t (its Jacobian does not)
         theta = np.asarray(theta, float)
         mass = self.mass_matrix_at(theta)
         omega = solve_small(mass, np.asarray(p, float))
         args = self._state(theta, omega)
         inv_mass = np.linalg.inv(mass)
         dw_dq = -inv_mass @ self._fn.dmomenta_dq(*args)
-        lag_qw = self._fn.lag_qw(*args)
+        rate_w = self._fn.lag_qw(*args)  # d(dp/dt)/d omega
+        if not self.is_conservative:
+            rate_w = rate_w - np.asarray(self._fn.damping_matrix(*self._params), float)
         top = np.concatenate([dw_dq, inv_mass], axis=-1)
-        bottom = np.concatenate([self._fn.lag_qq(*args) + lag_qw @ dw_dq, lag_qw @ inv_mass], -1)
+        bottom = np.concatenate([self._fn.lag_qq(*args) + rate_w @ dw_dq, rate_w @ inv_mass], -1)
         return np.concatenate([top, bottom], axis=-2)
 
     def positions(self, theta) -> tuple[np.ndarray, np.ndarray]:
@@ -212,8 +339,12 @@ class PendulumModel:
                 -np.cumsum(lengths * np.cos(theta), axis=-1))
 
     def __repr__(self) -> str:
+        forces = ""
+        if self.forced:
+            forces = (f", damping={self.damping}, drive_amplitude={self.drive_amplitude}, "
+                      f"drive_frequency={self.drive_frequency}")
         return (f"PendulumModel(n={self.n}, masses={self.masses}, lengths={self.lengths}, "
-                f"g={self.g})")
+                f"g={self.g}{forces})")
 
 
 def simple_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> PendulumModel:
@@ -229,16 +360,70 @@ def simple_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> 
                          (check.positive_number("length", length),), g)
 
 
+def driven_pendulum(damping: float = 0.5, drive_amplitude: float = 1.2,
+                    drive_frequency: float = 2 / 3, mass: float = 1.0, length: float = 1.0,
+                    g: float = 1.0) -> PendulumModel:
+    """The damped, driven simple pendulum.
+
+    ``m l^2 theta'' + damping theta' + m g l sin(theta) = drive_amplitude cos(drive_frequency t)``.
+    With ``m = l = g = 1`` (the defaults) this is the dimensionless form of
+    Baker and Gollub, with quality factor ``q = 1 / damping``; the defaults
+    (``q = 2``, amplitude 1.2, frequency 2/3) lie in its chaotic range.
+    ``damping = drive_amplitude = 0`` gives the conservative simple pendulum.
+
+    Parameters
+    ----------
+    damping : float >= 0
+        Viscous damping coefficient [N m s/rad].
+    drive_amplitude : float
+        Amplitude of the drive torque [N m].
+    drive_frequency : float > 0
+        Angular frequency of the drive [rad/s].
+    mass, length : float > 0
+    g : float
+
+    References
+    ----------
+    G. L. Baker, J. P. Gollub, *Chaotic Dynamics: An Introduction*, 2nd ed.,
+    Cambridge University Press 1996, ch. 3.
+
+    Examples
+    --------
+    >>> model = driven_pendulum()
+    >>> model.conformal_damping_rate, round(model.drive_period, 6)
+    (0.5, 9.424778)
+    >>> float(model.accelerations([0.0], [0.0], t=0.0)[0])  # the drive alone at t = 0
+    1.2
+    """
+    return PendulumModel(1, (check.positive_number("mass", mass),),
+                         (check.positive_number("length", length),), g, damping=damping,
+                         drive_amplitude=drive_amplitude, drive_frequency=drive_frequency)
+
+
 def double_pendulum(m1: float = 1.0, m2: float = 1.0, l1: float = 1.0, l2: float = 1.0,
-                    g: float = 9.81) -> PendulumModel:
-    """A double pendulum with absolute angles ``theta_1``, ``theta_2`` from the vertical."""
+                    g: float = 9.81, *, damping=0.0, drive_amplitude: float = 0.0,
+                    drive_frequency: float | None = None) -> PendulumModel:
+    """A double pendulum with absolute angles ``theta_1``, ``theta_2`` from the vertical.
+
+    ``damping`` (one number for both joints, or one per joint),
+    ``drive_amplitude`` and ``drive_frequency`` add joint damping and a drive
+    torque at the pivot; see :class:`PendulumModel`.
+    """
     masses = (check.positive_number("m1", m1), check.positive_number("m2", m2))
     lengths = (check.positive_number("l1", l1), check.positive_number("l2", l2))
-    return PendulumModel(2, masses, lengths, g)
+    return PendulumModel(2, masses, lengths, g, damping=damping, drive_amplitude=drive_amplitude,
+                         drive_frequency=drive_frequency)
 
 
-def n_pendulum(n: int, masses=None, lengths=None, g: float = 9.81) -> PendulumModel:
-    """A chain of ``n`` pendulums; masses and lengths default to 1."""
+def n_pendulum(n: int, masses=None, lengths=None, g: float = 9.81, *, damping=0.0,
+               drive_amplitude: float = 0.0, drive_frequency: float | None = None
+               ) -> PendulumModel:
+    """A chain of ``n`` pendulums; masses and lengths default to 1.
+
+    ``damping``, ``drive_amplitude`` and ``drive_frequency`` as for
+    :class:`PendulumModel`.
+    """
     n = check.integer_at_least("n", n, 1)
     return PendulumModel(n, (1.0,) * n if masses is None else masses,
-                         (1.0,) * n if lengths is None else lengths, g)
+                         (1.0,) * n if lengths is None else lengths, g, damping=damping,
+                         drive_amplitude=drive_amplitude, drive_frequency=drive_frequency)

@@ -25,6 +25,7 @@ from . import _validation as check
 from . import codegen
 from .integrators import (
     CALLS,
+    CONFORMAL_METHODS,
     MAX_SWEEPS,
     METHODS,
     NOT_CONVERGED,
@@ -38,8 +39,10 @@ from .integrators import (
     Method,
     get_method,
     run,
+    suitable_methods,
+    unsuitability,
 )
-from .model import PendulumModel, n_pendulum
+from .model import PendulumModel, driven_pendulum, n_pendulum
 
 __all__ = [
     "Trajectory",
@@ -122,30 +125,54 @@ class Trajectory:
 
 
 @functools.lru_cache(maxsize=64)
-def _field(n: int, params: tuple, separable: bool) -> HamiltonianField:
-    kernels = codegen.load_kernels(n)
+def _field(n: int, forced: bool, params: tuple, separable: bool,
+           damping_rate: float) -> HamiltonianField:
+    kernels = codegen.load_kernels(n, forced)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
-                            np.array(params, dtype=float), separable)
+                            np.array(params, dtype=float), separable, damping_rate)
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
-    """The model's compiled Hamiltonian vector field, as the integrators expect it."""
-    return _field(model.n, (*model.masses, *model.lengths, model.g), model.separable)
+    """The model's compiled vector field (Hamiltonian, plus its forces), as integrators see it."""
+    rate = model.conformal_damping_rate
+    return _field(model.n, model.forced, tuple(model.parameter_values.values()), model.separable,
+                  np.nan if rate is None else rate)
+
+
+def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianField):
+    """A ``ValueError`` naming the method and the reason if it cannot integrate ``model``."""
+    reason = unsuitability(method, field.damping_rate)
+    if reason is None:
+        return
+    if model.conformal_damping_rate is None:
+        reason += (f"; joint damping on a chain of {model.n} links gives dp/dt = -H_q - "
+                   "C M(theta)^-1 p, whose contraction rate depends on theta, so it is not "
+                   "conformal (conformal methods take one link)")
+    raise ValueError(f"`method` {method.name!r} cannot integrate this model (damping "
+                     f"{model.damping}): {reason}. Methods that can: "
+                     f"{suitable_methods(field.damping_rate)}")
 
 
 def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_step,
-             save_every, saved_q, saved_p, stats):
+             save_every, saved_q, saved_p, stats, t0: float = 0.0):
     """Run the compiled time loop on rows ``q, p`` of shape ``(K, n)``, in place.
 
-    Large ensembles are split into one slice per core; the compiled loop
-    releases the GIL, so the slices run in parallel threads.
+    Step ``s`` (counted from 1 over the whole run, ``first_step`` before this
+    call) starts at time ``t0 + (s - 1) h``. ``field.params`` and
+    ``field.damping_rate`` may hold one row per member (shapes ``(K, P)``,
+    ``(K,)``). Large ensembles are split into one slice per core; the compiled
+    loop releases the GIL, so the slices run in parallel threads.
     """
     loop, step_kernel = run.compiled, method.kernel.compiled  # compile before any threads
+    params = np.atleast_2d(np.asarray(field.params, dtype=float))
+    rates = np.atleast_1d(np.asarray(field.damping_rate, dtype=float))
+    per_member = params.shape[0] > 1
 
     def advance(rows):
-        loop(step_kernel, field.hamilton, field.acceleration, field.separable, q[rows],
-             p[rows], float(h), n_steps, first_step, save_every, field.params, saved_q[rows],
-             saved_p[rows], stats[rows])
+        loop(step_kernel, field.hamilton, field.acceleration, field.separable,
+             rates[rows] if per_member else rates, q[rows], p[rows], float(t0), float(h),
+             n_steps, first_step, save_every, params[rows] if per_member else params,
+             saved_q[rows], saved_p[rows], stats[rows])
 
     members, workers = q.shape[0], os.cpu_count() or 1
     if members < PARALLEL_MIN_MEMBERS or workers == 1:
@@ -275,12 +302,12 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     dt : float
         Step size [s], non-zero.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS`.
+        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``.
     p0 : array_like, shape like ``theta0``, optional
         Canonical momenta instead of ``omega0`` (give exactly one).
     t0 : float
-        Time at the start of the step [s] (the pendulums here are
-        autonomous; the time matters once forces depend on it).
+        Time at the start of the step [s] (the drive of a driven model
+        depends on it).
 
     Returns
     -------
@@ -305,54 +332,59 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     dt = check.real_number("dt", dt)
     if dt == 0:
         raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
-    check.real_number("t0", t0)
+    t0 = check.real_number("t0", t0)
+    field = hamiltonian_field(model)
+    _check_method_fits(model, method, field)
     shape = theta0.shape
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
     y = start.reshape(-1, model.n)
     y = to_method_variables(model, method, q, y, given_momenta=p0 is not None)
-    _step_rows(method, hamiltonian_field(model), q, y, dt, f"dt = {dt:g}")
+    _step_rows(method, field, q, y, dt, f"dt = {dt:g}", t0=t0)
     if method.variables == "velocity":
         y = model.momenta(q, y)
     return q.reshape(shape), y.reshape(shape)
 
 
 def _step_rows(method: Method, field: HamiltonianField, q: np.ndarray, y: np.ndarray,
-               h: float, what: str) -> None:
-    """One step of ``method`` on ``field`` for every row of ``q, y`` (C arrays), in place.
+               h: float, what: str, t0: float = 0.0) -> None:
+    """One step of ``method`` on ``field`` from time ``t0`` for every row of ``q, y``, in place.
 
-    ``what`` names the step in the error raised if the implicit equations fail.
+    ``q`` and ``y`` are C arrays; ``what`` names the step in the error raised
+    if the implicit equations fail.
     """
     unused = np.empty((q.shape[0], 1, q.shape[1]))
     stats = np.zeros((q.shape[0], 4), dtype=np.int64)
-    _advance(method, field, q, y, h, 1, 0, 2, unused, unused, stats)
+    _advance(method, field, q, y, h, 1, 0, 2, unused, unused, stats, t0=t0)
     if np.any(stats[:, STATUS] == NOT_CONVERGED):
         raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
                                f"within {MAX_SWEEPS} iterations ({what})")
 
 
 @functools.cache
-def _henon_kernel(n: int, link: int):
+def _henon_kernel(n: int, forced: bool, link: int):
     """Hamilton's equations of ``n`` links with ``theta_link`` as the independent variable.
 
     The compiled kernel has the signature of every vector field, on states of
     length ``n + 1``: ``q = (theta, t)`` and ``p = (p, w)``, where ``w`` is the
     distance ``level - theta_link`` to go, constant along the step. With
     ``s`` in ``[0, 1]`` and ``theta_link = theta_link(0) + s w``, it writes
-    ``dy/ds = w f(y) / theta_link'`` and ``dt/ds = w / theta_link'``; the
+    ``dy/ds = w f(t, y) / theta_link'`` and ``dt/ds = w / theta_link'``; the
     ``theta_link`` component is exactly ``w``, so any Runge-Kutta step of
-    length 1 ends on the surface up to the rounding of its final sum.
+    length 1 ends on the surface up to the rounding of its final sum. The
+    integrator's own time argument is ``s``; the field reads the time from
+    ``q[n]`` (a driven model's drive depends on it).
     """
     import numba
 
     from ._signatures import HAMILTON
 
-    hamilton = codegen.load_kernels(n).hamilton
+    hamilton = codegen.load_kernels(n, forced).hamilton
 
-    def rescaled(q, p, params, dq, dp):
+    def rescaled(s, q, p, params, dq, dp):
         theta, momenta = q[:n].copy(), p[:n].copy()
         dtheta, dmomenta = np.empty(n), np.empty(n)
-        hamilton(theta, momenta, params, dtheta, dmomenta)
+        hamilton(q[n], theta, momenta, params, dtheta, dmomenta)
         width = p[n]
         scale = width / dtheta[link]
         for i in range(n):
@@ -368,7 +400,7 @@ def _henon_kernel(n: int, link: int):
 
 
 def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, method="glrk4",
-               p0=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+               p0=None, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One step of ``method`` that ends exactly on the surface ``theta_link = level``.
 
     Henon's trick [Henon]_: where ``theta_link`` changes monotonically it can
@@ -401,6 +433,9 @@ def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, m
         the rescaled field breaks).
     p0 : array_like, shape like ``theta0``, optional
         Canonical momenta instead of ``omega0`` (give exactly one).
+    t0 : float
+        Time of the start state [s] (the drive of a driven model depends on
+        it; damping, if any, is integrated as part of the rescaled field).
 
     Returns
     -------
@@ -431,6 +466,9 @@ def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, m
     """
     check.pendulum_model(model)
     method = get_method(method)
+    field = hamiltonian_field(model)
+    _check_method_fits(model, method, field)
+    t0 = check.real_number("t0", t0)
     if method.variables != "canonical":
         raise ValueError(f"`method` must work in canonical variables for Henon's trick, got "
                          f"{method.name!r} (it steps (theta, omega) with theta' = omega)")
@@ -452,17 +490,18 @@ def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, m
     if np.any(model.dH_dp(theta, p)[:, link] == 0):
         raise FloatingPointError(f"theta_{link}' vanishes at a start state: theta_{link} "
                                  "cannot be the independent variable there")
-    q_ext = np.column_stack([theta, np.zeros(len(theta))])
+    q_ext = np.column_stack([theta, np.full(len(theta), t0)])
     p_ext = np.column_stack([p, width])
-    field = hamiltonian_field(model)
-    rescaled = HamiltonianField(_henon_kernel(n, link), field.acceleration, field.params, False)
+    # not separable, and any damping is part of the rescaled field (no conformal splitting)
+    rescaled = HamiltonianField(_henon_kernel(n, model.forced, link), field.acceleration,
+                                field.params, False, 0.0)
     _step_rows(method, rescaled, q_ext, p_ext, 1.0, "Henon's step to the surface")
     if not np.all(np.isfinite(q_ext)) or not np.all(np.isfinite(p_ext)):
         raise FloatingPointError(
             f"theta_{link}' vanishes between the state and the surface theta_{link} = level: "
             "the step cannot take theta as its independent variable there"
         )
-    elapsed = q_ext[:, n].reshape(batch)
+    elapsed = (q_ext[:, n] - t0).reshape(batch)
     return (q_ext[:, :n].reshape(theta0.shape), p_ext[:, :n].reshape(theta0.shape),
             float(elapsed) if not batch else elapsed)
 
@@ -538,14 +577,17 @@ def simulate(
     dt : float
         Step size [s], ``> 0``.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS`.
+        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``. On a
+        damped model the methods that assume a Hamiltonian
+        (``semi_implicit_euler``, ``leapfrog``) raise a ``ValueError``.
     save_every : int
         Keep every ``save_every``-th state (memory for long runs and ensembles).
     p0 : array_like, shape like ``theta0``, optional
         Initial canonical momenta, instead of ``omega0`` (give exactly one):
         restarting from a saved ``(theta, p)`` then involves no conversion.
     t0 : float
-        Time of the initial state [s]; ``Trajectory.t`` starts there.
+        Time of the initial state [s]; ``Trajectory.t`` starts there (the
+        drive of a driven model depends on it).
     keep : {"all", "final"}
         ``"all"``: every ``save_every``-th state; ``"final"``: the initial and
         the final state only (an ensemble's end points, in little memory).
@@ -591,6 +633,8 @@ def simulate(
             raise ValueError("give `save_every` only with keep='all' (keep='final' keeps the "
                              "initial and the final state)")
         save_every = n_steps
+    field = hamiltonian_field(model)
+    _check_method_fits(model, method, field)
 
     n_saved = n_steps // save_every + 1
     batch_shape = theta0.shape[:-1]
@@ -604,7 +648,6 @@ def simulate(
     saved_y = np.full((members, n_saved, model.n), np.nan)
     saved_q[:, 0], saved_y[:, 0] = q, y
     stats = np.zeros((members, 4), dtype=np.int64)
-    field = hamiltonian_field(model)
 
     # The compiled loop runs in chunks only so that a progress bar can move.
     chunk = max(1, min(n_steps, CHUNK_WORK // members))
@@ -613,7 +656,8 @@ def simulate(
     try:
         for first in range(0, n_steps, chunk):
             todo = min(chunk, n_steps - first)
-            _advance(method, field, q, y, dt, todo, first, save_every, saved_q, saved_y, stats)
+            _advance(method, field, q, y, dt, todo, first, save_every, saved_q, saved_y, stats,
+                     t0=t0)
             if bar is not None:
                 bar.update(todo)
             if np.all(stats[:, STATUS] != RUNNING):
@@ -688,10 +732,11 @@ def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
     Parameters
     ----------
     ns : sequence of int
-        Chain lengths (numbers of links) to prepare: 1 the simple pendulum,
-        2 the double pendulum, ...
+        Chain lengths (numbers of links) to prepare: 1 the simple pendulum
+        (and the driven pendulum's kernels), 2 the double pendulum, ...
     methods : sequence of str, optional
-        Method names; all of :data:`pendulum_lab.METHODS` by default.
+        Method names; all of :data:`pendulum_lab.METHODS` and
+        ``CONFORMAL_METHODS`` by default.
     progress : bool
         Show a progress bar.
 
@@ -700,7 +745,8 @@ def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
     float
         Seconds spent.
     """
-    names = [get_method(m).name for m in (METHODS if methods is None else methods)]
+    everything = [*METHODS, *CONFORMAL_METHODS]
+    names = [get_method(m).name for m in (everything if methods is None else methods)]
     ns = [check.integer_at_least("ns", n, 1) for n in ns]
     start = time.perf_counter()
     jobs = [(n, name) for n in ns for name in names]
@@ -710,4 +756,6 @@ def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
         jobs = tqdm(jobs, desc="compiling kernels", unit="kernel")
     for n, name in jobs:
         simulate(n_pendulum(n), np.full(n, 0.1), np.zeros(n), t_end=0.01, dt=0.01, method=name)
+    if 1 in ns:  # the step kernels take any field: one run compiles the forced field
+        simulate(driven_pendulum(), [0.1], [0.0], t_end=0.01, dt=0.01, method=names[0])
     return time.perf_counter() - start

@@ -12,8 +12,11 @@ simulation reruns when a slider is released, not while it moves.
 * :func:`explore_energy` -- pick the total energy; the chain starts at rest
   on that energy level and each link's phase-space projection is drawn.
 
-In a notebook cell, ``pl.widgets.explore(model)`` shows the explorer (it
-has ``_ipython_display_``). Each explorer keeps what it shows inspectable:
+In a notebook cell, ``pl.widgets.explore(model)`` shows the explorer. Its
+display carries the widget and a picture of the current figure
+(``image/png``, or ``image/jpeg`` for the simulator): a live front end shows
+the widget, a static page (the course website, a notebook viewer) the
+picture. Each explorer keeps what it shows inspectable:
 ``controls`` (name -> widget), ``trajectory``, ``figure``, ``message`` and
 ``update()``, so it can be driven without a browser::
 

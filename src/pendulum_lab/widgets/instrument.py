@@ -7,6 +7,7 @@ interactive matplotlib backend.
 
 from __future__ import annotations
 
+import base64
 import warnings
 
 import ipywidgets as widgets
@@ -156,13 +157,12 @@ class Instrument:
             self._canvas.draw()
         self._image.value = png_bytes(np.asarray(self._canvas.buffer_rgba()))
 
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
-
     def _repr_mimebundle_(self, **kwargs):
-        return self.widget._repr_mimebundle_(**kwargs)
+        # The widget for a live front end, and the figure as it is now for a page without a
+        # kernel (which shows the picture instead of controls that would do nothing).
+        bundle = self.widget._repr_mimebundle_(**kwargs)
+        bundle[f"image/{self._image.format}"] = base64.b64encode(self._image.value).decode()
+        return bundle
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.model!r})"

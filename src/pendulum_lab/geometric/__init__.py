@@ -1,0 +1,25 @@
+"""Why symplectic methods work: phase-space area, backward error analysis, adaptive steps.
+
+Submodules
+----------
+``phase_space``
+    Areas of blobs of initial states carried by the flow and by the methods,
+    one-step Jacobians, Poincare's integral invariant for chains.
+``modified_equations``
+    The symbolic engine: Taylor expansions of one step, modified vector
+    fields, elementary Hamiltonians.
+``backward_error``
+    :func:`modified_hamiltonian` for the pendulums, its numerical checks,
+    RK4's energy drift from its modified equation, global error growth.
+``standard_map``
+    Symplectic Euler on the pendulum as Chirikov's standard map; transport.
+``adaptive``
+    SciPy's adaptive solvers, a naive variable-step leapfrog and the
+    reversible Sundman-transformed adaptive leapfrog.
+``figures``
+    The figures of notebooks 13-16.
+"""
+
+from .backward_error import STEP_SIZE, modified_equation, modified_hamiltonian
+
+__all__ = ["STEP_SIZE", "modified_equation", "modified_hamiltonian"]
