@@ -221,3 +221,27 @@ def test_rest_state_at_energy():
         assert float(DP.potential_energy(theta)) == pytest.approx(energy, abs=1e-10)
     with pytest.raises(ValueError, match="energy"):
         analysis.rest_state_at_energy(DP, 30.0)
+
+
+def test_lyapunov_energy_and_landing_error_figures():
+    import dataclasses
+
+    from pendulum_lab import chaos
+
+    scan = chaos.lyapunov_by_energy(DP, [-20.0, 16.0], orbits=2, t_end=20.0, method="rk4",
+                                    threshold=0.3)
+    ax = plotting.plot_lyapunov_energy(scan).axes[0]
+    from matplotlib.collections import PathCollection
+
+    dots = [c for c in ax.collections if isinstance(c, PathCollection)]
+    assert sum(len(c.get_offsets()) for c in dots) == 4  # every orbit drawn once
+    means = ax.lines[0].get_ydata()
+    assert np.isnan(means[0]) and means[1] == pytest.approx(scan.exponent[2:].mean())
+    # Negative control: with every orbit regular there is no mean to draw.
+    regular = plotting.plot_lyapunov_energy(dataclasses.replace(scan, threshold=10.0)).axes[0]
+    assert np.all(np.isnan(regular.lines[0].get_ydata()))
+    theta, omega = chaos.section_spread(DP, -5.0, orbits=4)
+    errors = chaos.landing_errors(DP, theta, omega, dt=0.01, method="rk4", landing="henon")
+    line = errors.plot().axes[0].lines[0]
+    assert np.array_equal(np.sort(line.get_xdata()), np.sort(errors.speed))
+    assert set(line.get_ydata()) == set(errors.state_error)

@@ -20,7 +20,7 @@ from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, g
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
-from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
+from .simulate import Trajectory, hamiltonian_field, henon_step, simulate, step, step_count
 
 __version__ = "0.1.0"
 
@@ -56,6 +56,7 @@ __all__ = [
     "driven_pendulum",
     "get_method",
     "hamiltonian_field",
+    "henon_step",
     "modified_hamiltonian",
     "n_pendulum",
     "simple_pendulum",

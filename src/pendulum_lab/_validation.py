@@ -156,6 +156,14 @@ def pendulum_model(model):
     return model
 
 
+def double_pendulum(model):
+    """``model`` itself if it is a :class:`~pendulum_lab.PendulumModel` with two links."""
+    pendulum_model(model)
+    if model.n != 2:
+        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    return model
+
+
 def output_folder(name: str, value) -> Path:
     """A folder that exists (created with its parents if missing) and can be written to."""
     try:

@@ -48,6 +48,7 @@ __all__ = [
     "Trajectory",
     "canonical_state",
     "hamiltonian_field",
+    "henon_step",
     "progress_bar",
     "simulate",
     "step",
@@ -339,15 +340,170 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     q = theta0.reshape(-1, model.n).copy()
     y = start.reshape(-1, model.n)
     y = to_method_variables(model, method, q, y, given_momenta=p0 is not None)
-    unused = np.empty((q.shape[0], 1, model.n))
-    stats = np.zeros((q.shape[0], 4), dtype=np.int64)
-    _advance(method, field, q, y, dt, 1, 0, 2, unused, unused, stats, t0=t0)
-    if np.any(stats[:, STATUS] == NOT_CONVERGED):
-        raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
-                               f"within {MAX_SWEEPS} iterations (dt = {dt:g})")
+    _step_rows(method, field, q, y, dt, f"dt = {dt:g}", t0=t0)
     if method.variables == "velocity":
         y = model.momenta(q, y)
     return q.reshape(shape), y.reshape(shape)
+
+
+def _step_rows(method: Method, field: HamiltonianField, q: np.ndarray, y: np.ndarray,
+               h: float, what: str, t0: float = 0.0) -> None:
+    """One step of ``method`` on ``field`` from time ``t0`` for every row of ``q, y``, in place.
+
+    ``q`` and ``y`` are C arrays; ``what`` names the step in the error raised
+    if the implicit equations fail.
+    """
+    unused = np.empty((q.shape[0], 1, q.shape[1]))
+    stats = np.zeros((q.shape[0], 4), dtype=np.int64)
+    _advance(method, field, q, y, h, 1, 0, 2, unused, unused, stats, t0=t0)
+    if np.any(stats[:, STATUS] == NOT_CONVERGED):
+        raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
+                               f"within {MAX_SWEEPS} iterations ({what})")
+
+
+@functools.cache
+def _henon_kernel(n: int, forced: bool, link: int):
+    """Hamilton's equations of ``n`` links with ``theta_link`` as the independent variable.
+
+    The compiled kernel has the signature of every vector field, on states of
+    length ``n + 1``: ``q = (theta, t)`` and ``p = (p, w)``, where ``w`` is the
+    distance ``level - theta_link`` to go, constant along the step. With
+    ``s`` in ``[0, 1]`` and ``theta_link = theta_link(0) + s w``, it writes
+    ``dy/ds = w f(t, y) / theta_link'`` and ``dt/ds = w / theta_link'``; the
+    ``theta_link`` component is exactly ``w``, so any Runge-Kutta step of
+    length 1 ends on the surface up to the rounding of its final sum. The
+    integrator's own time argument is ``s``; the field reads the time from
+    ``q[n]`` (a driven model's drive depends on it).
+    """
+    import numba
+
+    from ._signatures import HAMILTON
+
+    hamilton = codegen.load_kernels(n, forced).hamilton
+
+    def rescaled(s, q, p, params, dq, dp):
+        theta, momenta = q[:n].copy(), p[:n].copy()
+        dtheta, dmomenta = np.empty(n), np.empty(n)
+        hamilton(q[n], theta, momenta, params, dtheta, dmomenta)
+        width = p[n]
+        scale = width / dtheta[link]
+        for i in range(n):
+            dq[i] = dtheta[i] * scale
+            dp[i] = dmomenta[i] * scale
+        dq[link] = width
+        dq[n] = scale
+        dp[n] = 0.0
+
+    # error_model="numpy": a vanishing theta_link' gives inf, caught by the caller, not an
+    # exception inside the compiled loop
+    return numba.njit(HAMILTON, error_model="numpy")(rescaled)
+
+
+def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, method="glrk4",
+               p0=None, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One step of ``method`` that ends exactly on the surface ``theta_link = level``.
+
+    Henon's trick [Henon]_: where ``theta_link`` changes monotonically it can
+    replace the time as the independent variable, ``dy/dtheta_link = f(y) /
+    theta_link'`` and ``dt/dtheta_link = 1 / theta_link'``. One step of the
+    integrator on this rescaled field, of length ``level - theta_link``, takes
+    the state onto the surface: no iteration, and the crossing time comes out
+    as one more component of the state. The step is the method's own (the
+    same tableau or the same kick-drift formulas), applied to the rescaled
+    field; so its error is of the method's order in the distance travelled.
+
+    Each member of a batch has its own distance to go; the step is written in
+    ``s = (theta_link - theta_link(0)) / (level - theta_link(0))`` in ``[0, 1]``
+    (see :func:`_henon_kernel`) so that a batch takes one step together.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0 : array_like, shape (n,) or (..., n)
+        Angles [rad] near the surface.
+    omega0 : array_like, shape like ``theta0``, optional
+        Angular velocities [rad/s]; or give ``p0``.
+    link : int
+        The link whose angle defines the surface (0-based).
+    level : float or array_like, shape ``theta0.shape[:-1]``
+        The surface ``theta_link = level`` [rad], one per member if an array.
+    method : str or Method
+        A key of :data:`pendulum_lab.METHODS` in canonical variables (the
+        report's velocity-variable methods hard-code ``theta' = omega``, which
+        the rescaled field breaks).
+    p0 : array_like, shape like ``theta0``, optional
+        Canonical momenta instead of ``omega0`` (give exactly one).
+    t0 : float
+        Time of the start state [s] (the drive of a driven model depends on
+        it; damping, if any, is integrated as part of the rescaled field).
+
+    Returns
+    -------
+    theta1, p1 : ndarray, shape like ``theta0``
+        The state on the surface (``theta1[..., link] == level`` up to one
+        rounding).
+    elapsed : ndarray, shape ``theta0.shape[:-1]`` (float for one state)
+        The time from the start to the surface [s]; negative if the surface
+        lies behind.
+
+    Raises
+    ------
+    FloatingPointError
+        If ``theta_link'`` vanishes on the way (the surface is not crossed).
+
+    References
+    ----------
+    .. [Henon] M. Henon, "On the numerical computation of Poincare maps",
+       Physica D 5 (1982) 412-414.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> theta1, p1, elapsed = pl.henon_step(pl.double_pendulum(), [-0.05, 0.3], [1.0, 0.0],
+    ...                                     link=0, level=0.0, method="rk4")
+    >>> bool(abs(theta1[0]) < 1e-16), round(elapsed, 3)     # on theta_1 = 0, after 0.046 s
+    (True, 0.046)
+    """
+    check.pendulum_model(model)
+    method = get_method(method)
+    field = hamiltonian_field(model)
+    _check_method_fits(model, method, field)
+    t0 = check.real_number("t0", t0)
+    if method.variables != "canonical":
+        raise ValueError(f"`method` must work in canonical variables for Henon's trick, got "
+                         f"{method.name!r} (it steps (theta, omega) with theta' = omega)")
+    link = check.index_below("link", link, model.n)
+    theta0, start = _initial_state(model, theta0, omega0, p0)
+    batch = theta0.shape[:-1]
+    level = np.asarray(level, dtype=float)
+    try:
+        level = np.broadcast_to(level, batch)
+    except ValueError:
+        raise ValueError(f"`level` must be a number or have shape {batch} (one per state), "
+                         f"got shape {level.shape}") from None
+    if not np.all(np.isfinite(level)):
+        raise ValueError("`level` must be finite")
+    n = model.n
+    theta = theta0.reshape(-1, n)
+    p = start.reshape(-1, n) if p0 is not None else model.momenta(theta, start.reshape(-1, n))
+    width = level.reshape(-1) - theta[:, link]
+    if np.any(model.dH_dp(theta, p)[:, link] == 0):
+        raise FloatingPointError(f"theta_{link}' vanishes at a start state: theta_{link} "
+                                 "cannot be the independent variable there")
+    q_ext = np.column_stack([theta, np.full(len(theta), t0)])
+    p_ext = np.column_stack([p, width])
+    # not separable, and any damping is part of the rescaled field (no conformal splitting)
+    rescaled = HamiltonianField(_henon_kernel(n, model.forced, link), field.acceleration,
+                                field.params, False, 0.0)
+    _step_rows(method, rescaled, q_ext, p_ext, 1.0, "Henon's step to the surface")
+    if not np.all(np.isfinite(q_ext)) or not np.all(np.isfinite(p_ext)):
+        raise FloatingPointError(
+            f"theta_{link}' vanishes between the state and the surface theta_{link} = level: "
+            "the step cannot take theta as its independent variable there"
+        )
+    elapsed = (q_ext[:, n] - t0).reshape(batch)
+    return (q_ext[:, :n].reshape(theta0.shape), p_ext[:, :n].reshape(theta0.shape),
+            float(elapsed) if not batch else elapsed)
 
 
 def to_method_variables(model, method, q, y, given_momenta: bool) -> np.ndarray:

@@ -8,8 +8,10 @@ prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
   stability (amplification of small swings) of one step;
 * :mod:`.accuracy`: observed order against a DOP853 reference, energy error
   over time;
-* :mod:`.comparison`: work-precision, a DOP853 run, one table row per method,
-  one initial state by several methods;
+* :mod:`.comparison`: work-precision (energy and global error), a DOP853 run,
+  the comparison table of every method on every problem, one initial state by
+  several methods;
+* :mod:`.iteration`: how fast an implicit step's stage iteration contracts;
 * :mod:`.oscillations`: exact and measured periods, spectra;
 * :mod:`.linearization`: equilibria, normal modes, the linearised motion.
 
@@ -22,6 +24,7 @@ from .accuracy import (
     ORDER_DTS,
     OrderResult,
     energy_growth,
+    global_error,
     observed_order,
     order_steps,
     reference_solution,
@@ -30,15 +33,18 @@ from .accuracy import (
 from .comparison import (
     ComparisonRow,
     EnergyComparison,
+    MethodComparison,
     ReferenceRun,
     WorkPrecision,
     compare_energy,
+    compare_methods,
     compare_trajectory,
     dop853_run,
     dop853_work_precision,
     pendulum_name,
     work_precision,
 )
+from .iteration import StageIteration, stage_contraction
 from .linearization import (
     equilibrium_angles,
     find_equilibrium,
@@ -61,11 +67,14 @@ __all__ = [
     "ORDER_DTS",
     "ComparisonRow",
     "EnergyComparison",
+    "MethodComparison",
     "OrderResult",
     "ReferenceRun",
+    "StageIteration",
     "WorkPrecision",
     "amplification",
     "compare_energy",
+    "compare_methods",
     "compare_trajectory",
     "dominant_frequencies",
     "dop853_run",
@@ -74,6 +83,7 @@ __all__ = [
     "equilibrium_angles",
     "exact_period",
     "find_equilibrium",
+    "global_error",
     "linearized_solution",
     "normal_mode_frequencies",
     "normal_modes",
@@ -86,6 +96,7 @@ __all__ = [
     "reversibility_error",
     "spectrum",
     "stability_limit",
+    "stage_contraction",
     "step_jacobian",
     "symplecticity_defect",
     "windowed_energy_error",

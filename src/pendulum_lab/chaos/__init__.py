@@ -6,12 +6,14 @@ different motion. This package turns that into measurements, one topic per
 module:
 
 * :mod:`.separation`: phase-space distance of two nearby trajectories
-  (:func:`separation`);
+  (:func:`separation`), or of two computed runs (:func:`separation_between`);
 * :mod:`.lyapunov`: the largest Lyapunov exponent by two independent methods
-  (:func:`lyapunov_benettin`, :func:`lyapunov_variational`);
-* :mod:`.sections`: Poincare sections on energy levels, crossings located to
-  round-off (:func:`section_states`, :func:`poincare_section`,
-  :func:`energy_sections`);
+  (:func:`lyapunov_benettin`, :func:`lyapunov_variational`), and per energy
+  surface (:func:`lyapunov_by_energy`);
+* :mod:`.sections`: Poincare sections on energy levels, crossings landed on
+  the surface by Newton's method in time or by Henon's trick
+  (:func:`section_states`, :func:`section_spread`, :func:`poincare_section`,
+  :func:`energy_sections`, :func:`landing_errors`);
 * :mod:`.flips`: Heyl's flip-time fractal (:func:`can_flip`,
   :func:`flip_time_map`);
 * :mod:`.small_angles`: where the linearised and the full motion part
@@ -31,13 +33,35 @@ depend on that choice of norm; finite-time estimates do, a little.
 """
 
 from .flips import FlipMap, can_flip, flip_time_map
-from .lyapunov import LyapunovEstimate, lyapunov_benettin, lyapunov_variational
-from .sections import PoincareSection, energy_sections, poincare_section, section_states
-from .separation import Separation, separation
+from .lyapunov import (
+    REGULAR_BELOW,
+    EnergyExponent,
+    EnergyLyapunov,
+    LyapunovEstimate,
+    lyapunov_benettin,
+    lyapunov_by_energy,
+    lyapunov_variational,
+)
+from .sections import (
+    LANDINGS,
+    LandingErrors,
+    PoincareSection,
+    energy_sections,
+    landing_errors,
+    poincare_section,
+    section_spread,
+    section_states,
+)
+from .separation import Separation, separation, separation_between
 from .small_angles import SmallAngleComparison, small_angle_comparison
 
 __all__ = [
+    "LANDINGS",
+    "REGULAR_BELOW",
+    "EnergyExponent",
+    "EnergyLyapunov",
     "FlipMap",
+    "LandingErrors",
     "LyapunovEstimate",
     "PoincareSection",
     "Separation",
@@ -45,10 +69,14 @@ __all__ = [
     "can_flip",
     "energy_sections",
     "flip_time_map",
+    "landing_errors",
     "lyapunov_benettin",
+    "lyapunov_by_energy",
     "lyapunov_variational",
     "poincare_section",
+    "section_spread",
     "section_states",
     "separation",
+    "separation_between",
     "small_angle_comparison",
 ]

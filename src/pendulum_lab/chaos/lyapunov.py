@@ -7,6 +7,11 @@ trajectory with the Jacobian of Hamilton's equations. Both run as one
 seed and interval they follow the same reference trajectory to the last bit
 and differ only in how the growth of a small perturbation is computed.
 
+The exponent of a chaotic orbit is a property of the chaotic component it
+explores, and that component lies on one energy surface:
+:func:`lyapunov_by_energy` estimates it for orbits spread over each of
+several energy surfaces, and tells the orbits of regular islands apart.
+
 References
 ----------
 .. [Benettin] G. Benettin, L. Galgani, A. Giorgilli, J.-M. Strelcyn,
@@ -19,6 +24,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -28,9 +34,23 @@ from ..model import PendulumModel
 from ..segments import segment_length, simulate_segments
 from ..simulate import Trajectory, canonical_state, time_grid
 from ._common import phase_distance, require_finite, scalar_or_array, unit_direction
+from .sections import section_spread
 from .separation import perturbed
 
-__all__ = ["LyapunovEstimate", "lyapunov_benettin", "lyapunov_variational"]
+__all__ = [
+    "REGULAR_BELOW",
+    "EnergyExponent",
+    "EnergyLyapunov",
+    "LyapunovEstimate",
+    "lyapunov_benettin",
+    "lyapunov_by_energy",
+    "lyapunov_variational",
+]
+
+#: An orbit whose estimate after 100 s lies below this [1/s] is counted as
+#: regular: on a regular orbit the estimate falls like ``ln(c t) / t``
+#: (``ln(100) / 100 = 0.046``), on a chaotic one it settles on a plateau.
+REGULAR_BELOW = 0.1
 
 
 @dataclass(frozen=True)
@@ -333,3 +353,138 @@ def lyapunov_variational(
     t = (np.arange(blocks) + 1) * every * dt
     return LyapunovEstimate(t, running.reshape(blocks, *batch), "variational", run.method.name,
                             dt, time.perf_counter() - start)
+
+
+class EnergyExponent(NamedTuple):
+    """The exponent on one energy surface: mean and standard error over its chaotic orbits."""
+
+    energy: float
+    mean: float
+    standard_error: float
+    chaotic: int
+    orbits: int
+
+
+@dataclass(frozen=True)
+class EnergyLyapunov:
+    """Lyapunov exponents of orbits spread over energy surfaces; see :func:`lyapunov_by_energy`.
+
+    Attributes
+    ----------
+    energies : ndarray, shape (E,)
+        The energy surfaces [J].
+    energy : ndarray, shape (K,)
+        The energy of each orbit [J].
+    theta0, omega0 : ndarray, shape (K, n)
+        The initial states.
+    exponent : ndarray, shape (K,)
+        Benettin's estimate after ``t_end`` [1/s].
+    threshold : float
+        Orbits with ``exponent < threshold`` count as regular.
+    t_end, dt : float
+    method : str
+    wall_time : float
+    """
+
+    energies: np.ndarray
+    energy: np.ndarray
+    theta0: np.ndarray
+    omega0: np.ndarray
+    exponent: np.ndarray
+    threshold: float
+    t_end: float
+    dt: float
+    method: str
+    wall_time: float
+
+    @property
+    def regular(self) -> np.ndarray:
+        """Boolean mask, shape (K,): orbits whose estimate lies below ``threshold``."""
+        return self.exponent < self.threshold
+
+    def per_energy(self) -> list[EnergyExponent]:
+        """One :class:`EnergyExponent` per energy (mean NaN where no orbit is chaotic)."""
+        rows = []
+        for energy in self.energies:
+            here = self.energy == energy
+            chaotic = self.exponent[here & ~self.regular]
+            mean = float(chaotic.mean()) if chaotic.size else np.nan
+            error = float(chaotic.std(ddof=1) / np.sqrt(chaotic.size)) if chaotic.size > 1 \
+                else np.nan
+            rows.append(EnergyExponent(float(energy), mean, error, int(chaotic.size),
+                                       int(here.sum())))
+        return rows
+
+    def plot(self, ax=None):
+        """Exponent against energy: every orbit, and the mean over the chaotic ones."""
+        from ..plotting import plot_lyapunov_energy
+
+        return plot_lyapunov_energy(self, ax=ax)
+
+
+def lyapunov_by_energy(
+    model: PendulumModel,
+    energies,
+    *,
+    orbits: int = 12,
+    t_end: float = 100.0,
+    dt: float = 0.01,
+    method="glrk4",
+    threshold: float = REGULAR_BELOW,
+    seed=0,
+    progress: bool | None = None,
+) -> EnergyLyapunov:
+    """Benettin's exponent for orbits spread over each of several energy surfaces.
+
+    The exponent belongs to a chaotic component, and a component lies on one
+    energy surface: averaging over releases of different energies mixes
+    different components, and releases in regular islands add near-zero
+    values. Here the starts of each energy are those of its Poincare section
+    (:func:`~pendulum_lab.chaos.section_spread`), all orbits run as one
+    ensemble (:func:`lyapunov_benettin`), and the orbits whose estimate after
+    ``t_end`` stays below ``threshold`` are counted as regular and left out of
+    the mean (:meth:`EnergyLyapunov.per_energy`).
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A double pendulum.
+    energies : sequence of float
+        Energies [J], above the minimum of the potential energy.
+    orbits : int
+        Orbits per energy, ``>= 2``.
+    t_end, dt, method, seed, progress
+        As for :func:`lyapunov_benettin`.
+    threshold : float
+        Estimates below it [1/s] count as regular orbits, ``> 0``; the default
+        :data:`REGULAR_BELOW` suits ``t_end`` near 100 s.
+
+    Returns
+    -------
+    EnergyLyapunov
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> scan = lyapunov_by_energy(pl.double_pendulum(), [-20.0, 16.0], orbits=2, t_end=20.0,
+    ...                           method="rk4", threshold=0.3)
+    >>> [(row.energy, row.chaotic) for row in scan.per_energy()]
+    [(-20.0, 0), (16.0, 2)]
+    """
+    check.double_pendulum(model)
+    energies = np.array([check.real_number("energies", e) for e in np.atleast_1d(energies)])
+    lowest = float(model.potential_energy(np.zeros(2)))
+    if energies.size == 0 or np.any(energies <= lowest):
+        raise ValueError(f"`energies` must lie above the minimum of the potential energy "
+                         f"({lowest:.6g} J), got {energies.tolist()}")
+    orbits = check.integer_at_least("orbits", orbits, 2)
+    threshold = check.positive_number("threshold", threshold)
+    starts = [section_spread(model, energy, orbits) for energy in energies]
+    theta0 = np.concatenate([theta for theta, _ in starts])
+    omega0 = np.concatenate([omega for _, omega in starts])
+    energy = np.repeat(energies, [len(theta) for theta, _ in starts])
+    estimate = lyapunov_benettin(model, theta0, omega0, t_end=t_end, dt=dt, method=method,
+                                 seed=seed, progress=progress)
+    return EnergyLyapunov(energies, energy, theta0, omega0, np.asarray(estimate.exponent),
+                          threshold, float(estimate.t[-1]), estimate.dt, estimate.method,
+                          estimate.wall_time)

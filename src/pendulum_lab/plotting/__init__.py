@@ -9,14 +9,17 @@ and a test can inspect the artists under any backend. By topic:
 * :mod:`.trajectories`: energies, angles, phase space, the chain, the
   explorers' :data:`PANELS`;
 * :mod:`.methods`: observed order, energy error growth, work-precision,
-  amplification of small swings (linear stability);
+  amplification of small swings (linear stability), the contraction of an
+  implicit method's stage iteration;
 * :mod:`.chaos`: separation, Lyapunov exponents, Poincare sections, the
   flip-time map, the small-angle comparison.
 """
 
 from .chaos import (
     plot_flip_map,
+    plot_landing_errors,
     plot_lyapunov,
+    plot_lyapunov_energy,
     plot_parting,
     plot_section,
     plot_sections,
@@ -41,6 +44,7 @@ from .methods import (
     plot_energy_comparison,
     plot_energy_error_growth,
     plot_order,
+    plot_stage_contraction,
     plot_work_precision,
 )
 from .trajectories import (
@@ -80,9 +84,11 @@ __all__ = [
     "plot_energy_error",
     "plot_energy_error_growth",
     "plot_flip_map",
+    "plot_landing_errors",
     "plot_linear_vs_nonlinear",
     "plot_link_projections",
     "plot_lyapunov",
+    "plot_lyapunov_energy",
     "plot_modified_level_sets",
     "plot_normal_modes",
     "plot_order",
@@ -95,6 +101,7 @@ __all__ = [
     "plot_separation",
     "plot_small_angle",
     "plot_spectrum",
+    "plot_stage_contraction",
     "plot_work_precision",
     "subscript",
     "wrap_angle",

@@ -13,13 +13,16 @@ from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap, LogNorm
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from .. import _validation as check
 from .figures import get_axes, new_figure
 
 __all__ = [
     "plot_flip_map",
+    "plot_landing_errors",
     "plot_lyapunov",
+    "plot_lyapunov_energy",
     "plot_parting",
     "plot_section",
     "plot_sections",
@@ -50,6 +53,45 @@ def plot_lyapunov(estimate, ax: Axes | None = None, label=None, **kwargs) -> Fig
     lines[0].set_label(label)
     ax.axhline(0.0, color="0.6", lw=0.8)
     ax.set(xlabel="t (s)", ylabel="running estimate of lambda_1 (1/s)")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_lyapunov_energy(scan, ax: Axes | None = None) -> Figure:
+    """Exponent against energy for a :class:`~pendulum_lab.chaos.EnergyLyapunov`.
+
+    Every orbit is a dot (hollow if it counts as regular); the line joins the
+    means over the chaotic orbits of each energy, with their standard errors.
+    """
+    ax = get_axes(ax, width=6.4, height=4.0)
+    regular = scan.regular
+    ax.scatter(scan.energy[~regular], scan.exponent[~regular], s=12, color="0.55",
+               linewidths=0, label="one orbit (chaotic)")
+    ax.scatter(scan.energy[regular], scan.exponent[regular], s=14, facecolors="none",
+               edgecolors="0.35", linewidths=0.8, label="one orbit (regular)")
+    rows = scan.per_energy()
+    energy = np.array([row.energy for row in rows])
+    mean = np.array([row.mean for row in rows])
+    error = np.array([row.standard_error for row in rows])
+    ax.errorbar(energy, mean, yerr=error, color="C3", marker="o", ms=4, capsize=3,
+                label="mean over the chaotic orbits")
+    ax.axhline(scan.threshold, color="0.6", lw=0.8, ls="--")
+    ax.set(xlabel="energy E (J)", ylabel=f"lambda_1 after {scan.t_end:g} s (1/s)",
+           title=f"{scan.method}, dt = {scan.dt:g} s; dashed: regular below "
+                 f"{scan.threshold:g} 1/s")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_landing_errors(errors, ax: Axes | None = None, **kwargs) -> Figure:
+    """A :class:`~pendulum_lab.chaos.LandingErrors`: error against crossing speed, log-log."""
+    ax = get_axes(ax, width=6.0, height=4.0)
+    order = np.argsort(errors.speed)
+    kwargs.setdefault("label", f"{errors.landing}, {errors.method}, dt = {errors.dt:g} s")
+    ax.loglog(errors.speed[order], errors.state_error[order], "o-", ms=4, **kwargs)
+    ax.xaxis.set_minor_formatter(NullFormatter())  # a short range labels its minor ticks
+    ax.set(xlabel="speed of the crossing |theta' of the surface's link| (rad/s)",
+           ylabel="distance from the exact crossing")
     ax.legend(fontsize="small")
     return ax.figure
 

@@ -1,4 +1,7 @@
-"""Figures that compare integrators: observed order, energy error growth, work-precision."""
+"""Figures that compare integrators: observed order, energy error growth, work-precision.
+
+Also the contraction of an implicit method's stage iteration against the step.
+"""
 
 from __future__ import annotations
 
@@ -15,6 +18,7 @@ __all__ = [
     "plot_energy_comparison",
     "plot_energy_error_growth",
     "plot_order",
+    "plot_stage_contraction",
     "plot_work_precision",
 ]
 
@@ -144,8 +148,9 @@ def plot_order(results, ax: Axes | None = None) -> Figure:
     return ax.figure
 
 
-def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) -> Figure:
-    """Energy error against cost, one line per method (a work-precision diagram).
+def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None,
+                        y: str = "energy_error") -> Figure:
+    """Error against cost, one line per method (a work-precision diagram).
 
     Parameters
     ----------
@@ -153,6 +158,9 @@ def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) ->
     x : {"wall_time", "evaluations"}
         The cost axis.
     ax : Axes, optional
+    y : {"energy_error", "state_error"}
+        The error axis: the largest energy error of the run, or the global
+        error of the state at the final time.
 
     Returns
     -------
@@ -160,19 +168,21 @@ def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None) ->
         Lower left is better: less error for less work.
     """
     x = check.choice("x", x, ("wall_time", "evaluations"))
+    y = check.choice("y", y, ("energy_error", "state_error"))
     ax = get_axes(ax, width=6.0, height=4.2)
     for name in dict.fromkeys(point.method for point in points):
         mine = [point for point in points if point.method == name and point.completed]
         style = ":" if name == "DOP853" else "-"
         ax.loglog(
             [getattr(point, x) for point in mine],
-            [point.energy_error for point in mine],
+            [getattr(point, y) for point in mine],
             "o" + style,
             label=name,
         )
     ax.set(
         xlabel="wall time (s)" if x == "wall_time" else "vector-field evaluations",
-        ylabel="max |E - E(0)| (J)",
+        ylabel="max |E - E(0)| (J)" if y == "energy_error"
+        else "global error at T, max |(theta, omega) - reference|",
     )
     ax.legend(fontsize="small")
     return ax.figure
@@ -198,5 +208,30 @@ def plot_energy_comparison(comparison: EnergyComparison, ax: Axes | None = None)
         err = np.abs(traj.relative_energy_error)
         ax.semilogy(traj.t, np.where(err > 0, err, np.nan), label=name, lw=1)
     ax.set(xlabel="t (s)", ylabel="|E - E(0)| / |E(0)|")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_stage_contraction(iterations, ax: Axes | None = None, label: str = "") -> Figure:
+    """Measured and predicted contraction per sweep against the step, log-log.
+
+    Parameters
+    ----------
+    iterations : sequence of StageIteration
+        From :func:`pendulum_lab.analysis.stage_contraction` at several steps.
+    ax : Axes, optional
+    label : str
+        Names the state in the legend.
+    """
+    ax = get_axes(ax, width=6.0, height=4.2)
+    if not iterations:
+        raise ValueError("`iterations` must hold at least one StageIteration")
+    dts = np.array([it.dt for it in iterations])
+    measured = np.array([it.contraction for it in iterations])
+    predicted = np.array([it.predicted for it in iterations])
+    dots = ax.loglog(dts, measured, "o", label=f"measured{', ' + label if label else ''}")[0]
+    ax.loglog(dts, predicted, "-", color=dots.get_color(), lw=1.0,
+              label=f"h rho(A) rho(df/dy){', ' + label if label else ''}")
+    ax.set(xlabel="step h (s)", ylabel="contraction per sweep")
     ax.legend(fontsize="small")
     return ax.figure
