@@ -77,6 +77,20 @@ class DiscreteLagrangian:
         ``p_{k+1} = D_2 L_d(q, q_next)``.
     euler_lagrange : sympy.Matrix, shape (n, 1)
         ``D_2 L_d(q_prev, q) + D_1 L_d(q, q_next)``; zero along a discrete motion.
+    v : sympy.Matrix, shape (n, 1)
+        Symbols for the step's velocity ``(q_next - q) / h``, used by the
+        *velocity forms* below, in which ``q``, ``q_next`` and ``v`` are
+        independent (so no ``1/h`` appears; :meth:`with_velocity` substitutes).
+    mean_mass : sympy.Matrix, shape (n, n)
+        ``(1/h) d^2 L_d / dv^2``: ``M`` at the midpoint, or the mean of ``M`` at
+        the two ends (trapezoid). Symmetric positive definite.
+    momentum_minus_form, momentum_plus_form : sympy.Matrix, shape (n, 1)
+        The transforms in velocity form: ``mean_mass v - dL_d/dq`` and
+        ``mean_mass v + dL_d/dq_next``, derivatives at fixed ``v``.
+    momentum_minus_jacobian_form : sympy.Matrix, shape (n, n)
+        ``d p_k / d q_next`` (the total derivative, ``v`` moving with
+        ``q_next``) in velocity form: the Jacobian of Newton's method for
+        ``q_next``.
 
     Examples
     --------
@@ -98,6 +112,31 @@ class DiscreteLagrangian:
         self.momentum_plus = sp.expand(self._gradient(self.expression, self.q_next))
         self.euler_lagrange = (self._gradient(self(self.q_prev, self.q), self.q)
                                + self._gradient(self.expression, self.q))
+        self._velocity_forms()
+
+    def _velocity_forms(self) -> None:
+        """The transforms with the velocity ``v`` as independent symbols (see the attributes).
+
+        With ``L_d(a, b) = A(a, b, (b - a)/h)``: ``D_1 L_d = A_a - A_v / h`` and
+        ``D_2 L_d = A_b + A_v / h``, and ``A_v / h = mean_mass v`` because ``L``
+        is quadratic in the velocity.
+        """
+        names = (["v_{k}"] if self.n == 1
+                 else [f"v_{{{i},k}}" for i in range(1, self.n + 1)])
+        self.v = sp.Matrix([sp.Symbol(name, real=True) for name in names])
+        action = self._action(self.q, self.q_next, self.v)
+        velocity_momentum = self._gradient(action, self.v) / self.h
+        self.mean_mass = sp.expand(velocity_momentum.jacobian(self.v))
+        self.momentum_minus_form = sp.expand(velocity_momentum - self._gradient(action, self.q))
+        self.momentum_plus_form = sp.expand(velocity_momentum
+                                            + self._gradient(action, self.q_next))
+        self.momentum_minus_jacobian_form = sp.expand(
+            self.momentum_minus_form.jacobian(self.q_next)
+            + self.momentum_minus_form.jacobian(self.v) / self.h)
+
+    def with_velocity(self, expr):
+        """``expr`` in velocity form with ``v = (q_next - q) / h`` put back."""
+        return expr.xreplace(dict(zip(self.v, (self.q_next - self.q) / self.h)))
 
     @staticmethod
     def _gradient(expr, variables) -> sp.Matrix:
@@ -112,7 +151,10 @@ class DiscreteLagrangian:
     def __call__(self, a, b) -> sp.Expr:
         """``L_d(a, b)`` for configurations ``a``, ``b`` (sequences of length n)."""
         a, b = sp.Matrix(a), sp.Matrix(b)
-        velocity = (b - a) / self.h
+        return self._action(a, b, (b - a) / self.h)
+
+    def _action(self, a, b, velocity) -> sp.Expr:
+        """The rule's quadrature of the action from ``a`` to ``b`` at the given velocity."""
         if self.rule == "midpoint":
             return self.h * self.lagrangian_at((a + b) / 2, velocity)
         return self.h / 2 * (self.lagrangian_at(a, velocity) + self.lagrangian_at(b, velocity))
@@ -189,6 +231,10 @@ def reference_step(n: int, rule: str, parameters: dict, q0, p0, h: float,
     except KeyError as missing:
         raise ValueError(f"`parameters` lacks a value for {missing}") from None
     q0, p0 = np.asarray(q0, float), np.asarray(p0, float)
+    if q0.shape != (n,) or p0.shape != (n,):
+        raise ValueError(f"`q0` and `p0` must have shape ({n},), got {q0.shape} and {p0.shape}")
+    if not (np.isfinite(h) and h != 0):
+        raise ValueError(f"`h` must be a finite, non-zero step, got {h}")
     mass = sp.lambdify((*dl.chain.q, *dl.chain.parameters), dl.chain.mass_matrix, dummify=True)
     q1 = q0 + h * np.linalg.solve(np.asarray(mass(*q0, *values), float), p0)
     for _ in range(max_iterations):
