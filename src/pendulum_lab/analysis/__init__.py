@@ -4,11 +4,12 @@ Each function returns numbers a test or a notebook can assert on; none
 prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
 :mod:`pendulum_lab.tables`). By topic:
 
-* :mod:`.structure`: symplecticity defect and reversibility error of one step;
+* :mod:`.structure`: Jacobians by finite differences, the symplectic-form defect of
+  a matrix and of one step, the reversibility error of one step;
 * :mod:`.accuracy`: observed order against a DOP853 reference, energy error
   over time;
-* :mod:`.comparison`: work-precision, a DOP853 run, one table row per method,
-  one initial state by several methods;
+* :mod:`.comparison`: work-precision, SciPy's adaptive solvers (:func:`scipy_run`),
+  one table row per method, one initial state by several methods;
 * :mod:`.oscillations`: exact and measured periods, spectra;
 * :mod:`.linearization`: equilibria, normal modes, the linearised motion.
 """
@@ -24,15 +25,16 @@ from .accuracy import (
     windowed_energy_error,
 )
 from .comparison import (
+    SCIPY_METHODS,
+    AdaptiveRun,
     ComparisonRow,
     EnergyComparison,
-    ReferenceRun,
     WorkPrecision,
     compare_energy,
     compare_trajectory,
-    dop853_run,
     dop853_work_precision,
     pendulum_name,
+    scipy_run,
     work_precision,
 )
 from .linearization import (
@@ -43,25 +45,32 @@ from .linearization import (
     rest_state_at_energy,
 )
 from .oscillations import dominant_frequencies, exact_period, oscillation_period, spectrum
-from .structure import reversibility_error, step_jacobian, symplecticity_defect
+from .structure import (
+    finite_difference_jacobian,
+    reversibility_error,
+    step_jacobian,
+    symplectic_form_defect,
+    symplecticity_defect,
+)
 
 __all__ = [
     "HIGH_ORDER_DTS",
     "ORDER_DTS",
+    "SCIPY_METHODS",
+    "AdaptiveRun",
     "ComparisonRow",
     "EnergyComparison",
     "OrderResult",
-    "ReferenceRun",
     "WorkPrecision",
     "compare_energy",
     "compare_trajectory",
     "dominant_frequencies",
-    "dop853_run",
     "dop853_work_precision",
     "energy_growth",
     "equilibrium_angles",
     "exact_period",
     "find_equilibrium",
+    "finite_difference_jacobian",
     "linearized_solution",
     "normal_mode_frequencies",
     "observed_order",
@@ -71,8 +80,10 @@ __all__ = [
     "reference_solution",
     "rest_state_at_energy",
     "reversibility_error",
+    "scipy_run",
     "spectrum",
     "step_jacobian",
+    "symplectic_form_defect",
     "symplecticity_defect",
     "windowed_energy_error",
     "work_precision",
