@@ -42,7 +42,8 @@ import sympy as sp
 
 from .mechanics import Chain, derive_chain
 
-__all__ = ["RULES", "DiscreteLagrangian", "discrete_lagrangian", "reference_step"]
+__all__ = ["RULES", "DiscreteLagrangian", "discrete_lagrangian", "discrete_momenta",
+           "reference_step"]
 
 RULES = ("midpoint", "trapezoid")
 
@@ -226,10 +227,7 @@ def reference_step(n: int, rule: str, parameters: dict, q0, p0, h: float,
     """
     dl = discrete_lagrangian(n, rule)
     minus, jac, plus = _step_functions(n, rule)
-    try:
-        values = [float(parameters[s]) for s in dl.chain.parameters]
-    except KeyError as missing:
-        raise ValueError(f"`parameters` lacks a value for {missing}") from None
+    values = _parameter_values(dl, parameters)
     q0, p0 = np.asarray(q0, float), np.asarray(p0, float)
     if q0.shape != (n,) or p0.shape != (n,):
         raise ValueError(f"`q0` and `p0` must have shape ({n},), got {q0.shape} and {p0.shape}")
@@ -245,3 +243,56 @@ def reference_step(n: int, rule: str, parameters: dict, q0, p0, h: float,
             return q1, np.asarray(plus(*q0, *q1, h, *values), float)
     raise RuntimeError(f"the discrete Legendre transform did not converge in {max_iterations} "
                        f"Newton iterations (h = {h})")
+
+
+def _parameter_values(dl: DiscreteLagrangian, parameters) -> list[float]:
+    """The chain's parameter values in the order of its symbols, from ``{symbol: value}``."""
+    if not isinstance(parameters, dict):
+        raise TypeError("`parameters` must be a dict {symbol: value} (a model's "
+                        f"parameter_values), got {type(parameters).__name__}")
+    try:
+        return [float(parameters[s]) for s in dl.chain.parameters]
+    except KeyError as missing:
+        raise ValueError(f"`parameters` lacks a value for {missing}") from None
+
+
+def discrete_momenta(n: int, rule: str, parameters: dict, q0, q1, h: float):
+    """The discrete Legendre transforms of steps ``q0 -> q1``: the momenta at both ends.
+
+    Parameters
+    ----------
+    n : int
+    rule : {"midpoint", "trapezoid"}
+    parameters : dict
+        A model's ``parameter_values``.
+    q0, q1 : array_like, shape (..., n)
+        Configurations at the start and the end of each step.
+    h : float
+        The step.
+
+    Returns
+    -------
+    p_start, p_end : ndarray, shape (..., n)
+        ``-D_1 L_d(q0, q1)`` and ``D_2 L_d(q0, q1)``. Along a discrete motion
+        ``q_0, q_1, ...`` the end momentum of one step equals the start
+        momentum of the next: that is the discrete Euler-Lagrange equation.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> pendulum = pl.simple_pendulum(mass=1.0, length=1.0)
+    >>> start, end = discrete_momenta(1, "midpoint", pendulum.parameter_values, [0.0], [0.1], 0.1)
+    >>> round(float(start[0] + end[0]), 12)   # twice m l^2 v, v = 1 rad/s
+    2.0
+    """
+    dl = discrete_lagrangian(n, rule)
+    minus, _, plus = _step_functions(n, rule)
+    values = _parameter_values(dl, parameters)
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    if q0.shape != q1.shape or q0.ndim == 0 or q0.shape[-1] != n:
+        raise ValueError(f"`q0` and `q1` must have the same shape (..., {n}), got {q0.shape} "
+                         f"and {q1.shape}")
+    if not (np.isfinite(h) and h != 0):
+        raise ValueError(f"`h` must be a finite, non-zero step, got {h}")
+    args = (*np.moveaxis(q0, -1, 0), *np.moveaxis(q1, -1, 0), h, *values)
+    return tuple(np.stack(np.broadcast_arrays(*f(*args)), axis=-1) for f in (minus, plus))

@@ -91,7 +91,7 @@ def symplectic_form_defect(matrix) -> float:
 
 
 def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4",
-                  p0=None, eps: float = 1e-6) -> np.ndarray:
+                  p0=None, eps: float = 1e-6, variables: str = "canonical") -> np.ndarray:
     """Jacobian of one step ``(theta, p) -> (theta1, p1)`` by central differences.
 
     Parameters
@@ -104,6 +104,10 @@ def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, metho
     method : str or Method
     eps : float
         Finite-difference increment in each of the ``2n`` variables.
+    variables : {"canonical", "velocity"}
+        The coordinates the step is seen in: ``(theta, p)``, or ``(theta,
+        omega)`` with ``omega = M(theta)^-1 p`` (the same map, other
+        coordinates; symplectic in both only when ``M`` is constant).
 
     Returns
     -------
@@ -120,6 +124,14 @@ def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, metho
     theta0, p0 = canonical_state(model, theta0, omega0, p0)
     if theta0.ndim != 1:
         raise ValueError(f"`theta0` must have shape (n,) (one state), got {theta0.shape}")
+    if check.choice("variables", variables, ("canonical", "velocity")) == "velocity":
+
+        def one_step(z):
+            theta1, p1 = step(model, z[:n], z[n:], dt=dt, method=method)
+            return np.concatenate([theta1, model.velocities(theta1, p1)])
+
+        return finite_difference_jacobian(
+            one_step, np.concatenate([theta0, model.velocities(theta0, p0)]), eps)
 
     def one_step(z):
         return np.concatenate(step(model, z[:n], p0=z[n:], dt=dt, method=method))
@@ -128,14 +140,15 @@ def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, metho
 
 
 def symplecticity_defect(model: PendulumModel, theta0, omega0=None, *, dt: float,
-                         method="glrk4", p0=None) -> float:
+                         method="glrk4", p0=None, variables: str = "canonical") -> float:
     """``max |Psi^T J Psi - J|`` for the Jacobian ``Psi`` of one step in ``(theta, p)``.
 
     Zero (to the finite-difference accuracy, about 1e-10) for a symplectic map.
-    Arguments as for :func:`step_jacobian`.
+    Arguments as for :func:`step_jacobian`; with ``variables="velocity"`` the
+    step is measured as a map of ``(theta, omega)``.
     """
     return symplectic_form_defect(step_jacobian(model, theta0, omega0, dt=dt, method=method,
-                                                p0=p0))
+                                                p0=p0, variables=variables))
 
 
 def reversibility_error(model: PendulumModel, theta0, omega0=None, *, dt: float,
