@@ -250,3 +250,48 @@ def test_unknown_rule_or_solver():
         variational_method("midpoint", "secant")
     with pytest.raises(ValueError, match="variational_midpoint"):
         pl.get_method("variational_simpson")  # the message lists the registered names
+
+
+# ---------------------------------------------------------------- momentum, not velocity
+def test_the_discrete_momentum_is_handed_from_step_to_step_and_is_the_runs_p():
+    run = pl.simulate(DP, [1.0, 1.5], [0.3, -0.2], t_end=1.0, dt=0.01,
+                      method="variational_trapezoid")
+    start, end = dm.discrete_momenta(2, "trapezoid", DP.parameter_values, run.theta[:-1],
+                                     run.theta[1:], run.dt)
+    assert np.max(np.abs(end[:-1] - start[1:])) < 1e-12  # the discrete Euler-Lagrange equation
+    assert np.max(np.abs(start - run.p[:-1])) < 1e-12
+    assert np.max(np.abs(end - run.p[1:])) < 1e-12
+    # negative control: the step velocities on both sides of a configuration differ
+    velocities = np.diff(run.theta, axis=0) / run.dt
+    assert np.max(np.abs(np.diff(velocities, axis=0))) > 1e-2
+    # and the transforms of the other rule do not match this run
+    other, _ = dm.discrete_momenta(2, "midpoint", DP.parameter_values, run.theta[:-1],
+                                   run.theta[1:], run.dt)
+    assert np.max(np.abs(other - run.p[:-1])) > 1e-6
+
+
+@pytest.mark.parametrize("name", ["variational_midpoint", "glrk8"])
+def test_theta_omega_are_canonical_for_one_link_only(name):
+    """A symplectic step stays symplectic in (theta, omega) when M is constant, not otherwise."""
+    one = analysis.symplecticity_defect(SP, [2.0], [0.5], dt=0.05, method=name,
+                                        variables="velocity")
+    assert one <= 1e-8
+    two = [analysis.symplecticity_defect(DP, [1.0, 1.5], [0.3, -0.2], dt=h, method=name,
+                                         variables="velocity") for h in (0.05, 0.025)]
+    assert two[1] > 1e-2 and 1.7 < two[0] / two[1] < 2.3  # O(h): the coordinates, not the method
+    # negative control: the same steps in (theta, p)
+    assert analysis.symplecticity_defect(DP, [1.0, 1.5], [0.3, -0.2], dt=0.05,
+                                         method=name) <= 1e-8
+    with pytest.raises(ValueError, match="`variables`"):
+        analysis.symplecticity_defect(SP, [2.0], [0.5], dt=0.05, method=name, variables="omega")
+
+
+def test_finite_difference_jacobian_of_a_linear_map_is_its_matrix():
+    matrix = np.array([[1.0, 2.0, 0.0], [0.5, -1.0, 3.0]])
+    jac = analysis.finite_difference_jacobian(lambda z: matrix @ z, [0.3, -0.2, 1.0])
+    assert jac.shape == (2, 3) and np.max(np.abs(jac - matrix)) < 1e-9
+    # negative control: a nonlinear map's Jacobian depends on the point
+    square = analysis.finite_difference_jacobian(lambda z: z**2, [1.0, 2.0])
+    assert np.max(np.abs(square - np.diag([2.0, 4.0]))) < 1e-8
+    with pytest.raises(ValueError, match="`z`"):
+        analysis.finite_difference_jacobian(lambda z: z, [[1.0]])

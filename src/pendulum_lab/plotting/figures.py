@@ -11,6 +11,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from .. import _validation as check
 from .._angles import wrap_angle
 from ..simulate import Trajectory
 
@@ -97,7 +98,7 @@ def axis_label(quantity: str, sub: str = "") -> str:
     >>> axis_label("theta", link_label(1, 2)), axis_label("t")
     ('θ₂ (rad)', 't (s)')
     """
-    symbol, unit = QUANTITIES[quantity]
+    symbol, unit = QUANTITIES[check.choice("quantity", quantity, QUANTITIES)]
     return f"{symbol}{sub} ({unit})"
 
 
