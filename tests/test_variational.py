@@ -56,7 +56,7 @@ def test_registered_with_their_properties_apart_from_the_course_table():
 
 def test_generated_kernels_print_the_discrete_legendre_transforms():
     kernels = codegen.load_discrete_kernels(2, "trapezoid")
-    for name in ("fixed_point_update", "newton_update", "momentum_plus"):
+    for name in ("fixed_point_update", "newton_update", "impulse"):
         assert f"def {name}(" in kernels.source
     assert kernels.path.exists() and kernels.path.read_text() == kernels.source
 

@@ -88,6 +88,11 @@ class DiscreteLagrangian:
     momentum_minus_form, momentum_plus_form : sympy.Matrix, shape (n, 1)
         The transforms in velocity form: ``mean_mass v - dL_d/dq`` and
         ``mean_mass v + dL_d/dq_next``, derivatives at fixed ``v``.
+    impulse_form : sympy.Matrix, shape (n, 1)
+        ``p_{k+1} - p_k = D_2 L_d + D_1 L_d`` in velocity form: ``h`` times
+        forces, without the ``mean_mass v`` that both transforms contain, so
+        a momentum update ``p_{k+1} = p_k + impulse`` carries no ``1/h``
+        amplification of round-off.
     momentum_minus_jacobian_form : sympy.Matrix, shape (n, n)
         ``d p_k / d q_next`` (the total derivative, ``v`` moving with
         ``q_next``) in velocity form: the Jacobian of Newton's method for
@@ -131,6 +136,8 @@ class DiscreteLagrangian:
         self.momentum_minus_form = sp.expand(velocity_momentum - self._gradient(action, self.q))
         self.momentum_plus_form = sp.expand(velocity_momentum
                                             + self._gradient(action, self.q_next))
+        self.impulse_form = sp.expand(self._gradient(action, self.q)
+                                      + self._gradient(action, self.q_next))
         self.momentum_minus_jacobian_form = sp.expand(
             self.momentum_minus_form.jacobian(self.q_next)
             + self.momentum_minus_form.jacobian(self.v) / self.h)

@@ -126,7 +126,7 @@ class HamiltonianField:
     discrete : callable or None
         ``discrete(rule)`` returns the compiled discrete Legendre transforms
         of the field's discrete Lagrangian by ``rule`` (a namespace with
-        ``fixed_point_update``, ``newton_update``, ``momentum_plus``); None
+        ``fixed_point_update``, ``newton_update``, ``impulse``); None
         when the field has no Lagrangian of its own (damping or a drive).
     """
 
@@ -506,17 +506,17 @@ def leapfrog_velocity_step(hamilton, acceleration, t, q, v, h, params, separable
 
 # ----------------------------------------------------------------------- variational integrators
 @jit_step
-def variational_step(update, momentum_plus, t, q, p, h, params, separable, damping_rate):
+def variational_step(update, impulse, t, q, p, h, params, separable, damping_rate):
     """A variational integrator [MW]: the discrete Legendre transforms, solved.
 
     ``p = -D_1 L_d(q, q1)``   (implicit in ``q1``)
-    ``p1 = D_2 L_d(q, q1)``   (explicit)
+    ``p1 = D_2 L_d(q, q1)``   (explicit; computed as ``p + D_2 L_d + D_1 L_d``)
 
     ``update(h, q, q1, params, p, out)`` writes the next iterate for ``q1``
     (a fixed-point or a Newton step, generated from the discrete Lagrangian);
     it is iterated from ``q1 = q`` until :func:`fixed_point_status` finds
     round-off (the first iterate is already a symplectic-Euler-like guess).
-    ``momentum_plus(h, q, q1, params, out)`` writes ``p1``. ``t``,
+    ``impulse(h, q, q1, params, out)`` writes ``p1 - p``. ``t``,
     ``separable`` and ``damping_rate`` are not used: the discrete Lagrangian
     is autonomous and conservative. ``calls`` counts kernel evaluations.
     """
@@ -529,9 +529,9 @@ def variational_step(update, momentum_plus, t, q, p, h, params, separable, dampi
         q1, new = new, q1
     if status != 1:
         return q, p, -1, sweeps
-    p1 = np.empty_like(p)
-    momentum_plus(h, q, q1, params, p1)
-    return q1, p1, sweeps, sweeps + 1
+    kick = np.empty_like(p)
+    impulse(h, q, q1, params, kick)
+    return q1, p + kick, sweeps, sweeps + 1
 
 
 #: How a variational step solves for ``q1``: the generated kernel it iterates.
@@ -569,7 +569,7 @@ def step_kernels(method: Method, field: HamiltonianField) -> tuple:
     if method.rule is None:
         return field.hamilton, field.acceleration
     kernels = field.discrete(method.rule)
-    return getattr(kernels, VARIATIONAL_SOLVERS[method.solver]), kernels.momentum_plus
+    return getattr(kernels, VARIATIONAL_SOLVERS[method.solver]), kernels.impulse
 
 
 # --------------------------------------------------------------------------- the time loop
