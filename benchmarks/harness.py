@@ -77,6 +77,8 @@ class Config:
     flip_t_end: float = 10.0
     limit_members: int = 4000  # item 6: ensemble verified against the C loop
     limit_steps: int = 200
+    variational_t_end: float = 20.0  # item 7
+    variational_rounds: int = 7
 
 
 FULL = Config("full")
@@ -98,6 +100,7 @@ QUICK = replace(
     flip_size=40,
     flip_t_end=5.0,
     limit_members=400,
+    variational_rounds=3,
 )
 SMOKE = replace(
     FULL,
@@ -124,6 +127,8 @@ SMOKE = replace(
     flip_t_end=1.0,
     limit_members=16,
     limit_steps=10,
+    variational_t_end=0.2,
+    variational_rounds=1,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

@@ -1,4 +1,4 @@
-"""The benchmark suite of issue 7: six items, each a ratio measured side by side.
+"""The benchmark suite of issue 7 (and item 7 of issue 12): each a ratio measured side by side.
 
 One file per item (``item_slider.py`` ... ``item_c_limit.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
@@ -36,6 +36,7 @@ from item_first_use import bench_first_use
 from item_long_run import bench_long_run
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
+from item_variational import bench_variational
 
 __all__ = [
     "COLUMNS",
@@ -63,6 +64,7 @@ ITEMS = {
     "report_glrk4": (4, bench_report_glrk4, False),
     "ensemble": (5, bench_ensemble, True),
     "c_limit": (6, bench_c_limit, True),
+    "variational": (7, bench_variational, False),
 }
 
 
@@ -75,7 +77,9 @@ def resolve(names) -> list[str]:
     for name in names:
         key = by_number.get(str(name), str(name).replace("-", "_"))
         if key not in ITEMS:
-            raise ValueError(f"unknown benchmark {name!r}; choose from {list(ITEMS)} or 1-6")
+            raise ValueError(
+                f"unknown benchmark {name!r}; choose from {list(ITEMS)} or 1-{len(ITEMS)}"
+            )
         keys.append(key)
     return sorted(set(keys), key=lambda k: ITEMS[k][0])
 

@@ -16,7 +16,14 @@ Quick start
 True
 """
 
-from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
+from .integrators import (
+    CONFORMAL_METHODS,
+    METHODS,
+    VARIATIONAL_METHODS,
+    ConvergenceError,
+    Method,
+    get_method,
+)
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
@@ -28,7 +35,7 @@ __version__ = "0.1.0"
 # first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
 _LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "discrete_mechanics", "events",
                     "geometric", "mechanics", "plotting", "report", "source", "tables", "timing",
-                    "widgets"}
+                    "warmup", "widgets"}
 
 
 def __getattr__(name):
@@ -36,6 +43,10 @@ def __getattr__(name):
         from .geometric import modified_hamiltonian
 
         return modified_hamiltonian
+    if name == "warm_up":  # reaches every layer's kernels, loaded on use
+        from .warmup import warm_up
+
+        return warm_up
     if name in _LAZY_SUBMODULES:
         import importlib
 
@@ -51,6 +62,7 @@ __all__ = [
     "PendulumModel",
     "SegmentedRun",
     "Trajectory",
+    "VARIATIONAL_METHODS",
     "derive_chain",
     "double_pendulum",
     "driven_pendulum",
@@ -64,4 +76,5 @@ __all__ = [
     "simulate_segments",
     "step",
     "step_count",
+    "warm_up",
 ]

@@ -25,9 +25,7 @@ from . import _validation as check
 from . import codegen
 from .integrators import (
     CALLS,
-    CONFORMAL_METHODS,
     MAX_SWEEPS,
-    METHODS,
     NOT_CONVERGED,
     NOT_FINITE,
     RUNNING,
@@ -39,10 +37,11 @@ from .integrators import (
     Method,
     get_method,
     run,
+    step_kernels,
     suitable_methods,
     unsuitability,
 )
-from .model import PendulumModel, driven_pendulum, n_pendulum
+from .model import PendulumModel
 
 __all__ = [
     "Trajectory",
@@ -54,7 +53,6 @@ __all__ = [
     "step",
     "step_count",
     "velocity_state",
-    "warm_up",
 ]
 
 # Show a progress bar by default once a run does this many state updates
@@ -128,8 +126,10 @@ class Trajectory:
 def _field(n: int, forced: bool, params: tuple, separable: bool,
            damping_rate: float) -> HamiltonianField:
     kernels = codegen.load_kernels(n, forced)
+    # An unforced chain also has a discrete Lagrangian (variational methods).
+    discrete = None if forced else functools.partial(codegen.load_discrete_kernels, n)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
-                            np.array(params, dtype=float), separable, damping_rate)
+                            np.array(params, dtype=float), separable, damping_rate, discrete)
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
@@ -141,7 +141,7 @@ def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
 
 def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianField):
     """A ``ValueError`` naming the method and the reason if it cannot integrate ``model``."""
-    reason = unsuitability(method, field.damping_rate)
+    reason = unsuitability(method, field)
     if reason is None:
         return
     if model.conformal_damping_rate is None:
@@ -150,7 +150,7 @@ def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianF
                    "conformal (conformal methods take one link)")
     raise ValueError(f"`method` {method.name!r} cannot integrate this model (damping "
                      f"{model.damping}): {reason}. Methods that can: "
-                     f"{suitable_methods(field.damping_rate)}")
+                     f"{suitable_methods(field)}")
 
 
 def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_step,
@@ -164,12 +164,13 @@ def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_st
     loop releases the GIL, so the slices run in parallel threads.
     """
     loop, step_kernel = run.compiled, method.kernel.compiled  # compile before any threads
+    first_kernel, second_kernel = step_kernels(method, field)
     params = np.atleast_2d(np.asarray(field.params, dtype=float))
     rates = np.atleast_1d(np.asarray(field.damping_rate, dtype=float))
     per_member = params.shape[0] > 1
 
     def advance(rows):
-        loop(step_kernel, field.hamilton, field.acceleration, field.separable,
+        loop(step_kernel, first_kernel, second_kernel, field.separable,
              rates[rows] if per_member else rates, q[rows], p[rows], float(t0), float(h),
              n_steps, first_step, save_every, params[rows] if per_member else params,
              saved_q[rows], saved_p[rows], stats[rows])
@@ -302,7 +303,8 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     dt : float
         Step size [s], non-zero.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``.
+        A key of :data:`pendulum_lab.METHODS`, ``CONFORMAL_METHODS`` or
+        ``VARIATIONAL_METHODS``.
     p0 : array_like, shape like ``theta0``, optional
         Canonical momenta instead of ``omega0`` (give exactly one).
     t0 : float
@@ -577,9 +579,11 @@ def simulate(
     dt : float
         Step size [s], ``> 0``.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``. On a
-        damped model the methods that assume a Hamiltonian
-        (``semi_implicit_euler``, ``leapfrog``) raise a ``ValueError``.
+        A key of :data:`pendulum_lab.METHODS`, ``CONFORMAL_METHODS`` or
+        ``VARIATIONAL_METHODS``. On a damped model the methods that assume a
+        Hamiltonian (``semi_implicit_euler``, ``leapfrog``, the variational
+        ones) raise a ``ValueError``; so do the variational methods on a driven
+        model.
     save_every : int
         Keep every ``save_every``-th state (memory for long runs and ensembles).
     p0 : array_like, shape like ``theta0``, optional
@@ -719,43 +723,3 @@ def simulate(
         wall_time=wall,
         completed=completed,
     )
-
-
-def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
-    """Compile now, or load from the disk cache, the kernels a course session uses.
-
-    Numba compiles each kernel the first time it runs on a machine (a few
-    seconds each) and keeps the machine code on disk. Calling this ahead of
-    time (``pendulum-lab warmup``; the Binder image does it while it is
-    built) spares students the wait.
-
-    Parameters
-    ----------
-    ns : sequence of int
-        Chain lengths (numbers of links) to prepare: 1 the simple pendulum
-        (and the driven pendulum's kernels), 2 the double pendulum, ...
-    methods : sequence of str, optional
-        Method names; all of :data:`pendulum_lab.METHODS` and
-        ``CONFORMAL_METHODS`` by default.
-    progress : bool
-        Show a progress bar.
-
-    Returns
-    -------
-    float
-        Seconds spent.
-    """
-    everything = [*METHODS, *CONFORMAL_METHODS]
-    names = [get_method(m).name for m in (everything if methods is None else methods)]
-    ns = [check.integer_at_least("ns", n, 1) for n in ns]
-    start = time.perf_counter()
-    jobs = [(n, name) for n in ns for name in names]
-    if progress:
-        from tqdm.auto import tqdm
-
-        jobs = tqdm(jobs, desc="compiling kernels", unit="kernel")
-    for n, name in jobs:
-        simulate(n_pendulum(n), np.full(n, 0.1), np.zeros(n), t_end=0.01, dt=0.01, method=name)
-    if 1 in ns:  # the step kernels take any field: one run compiles the forced field
-        simulate(driven_pendulum(), [0.1], [0.0], t_end=0.01, dt=0.01, method=names[0])
-    return time.perf_counter() - start

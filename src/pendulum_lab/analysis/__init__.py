@@ -4,13 +4,14 @@ Each function returns numbers a test or a notebook can assert on; none
 prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
 :mod:`pendulum_lab.tables`). By topic:
 
-* :mod:`.structure`: symplecticity defect, reversibility error and linear
-  stability (amplification of small swings) of one step;
+* :mod:`.structure`: Jacobians by finite differences, the symplectic-form defect of
+  a matrix and of one step, the reversibility error of one step, linear stability
+  (amplification of small swings);
 * :mod:`.accuracy`: observed order against a DOP853 reference, energy error
-  over time;
-* :mod:`.comparison`: work-precision (energy and global error), a DOP853 run,
-  the comparison table of every method on every problem, one initial state by
-  several methods;
+  over time, the global error at a time;
+* :mod:`.comparison`: work-precision (energy and global error), SciPy's adaptive
+  solvers (:func:`scipy_run`), the comparison table of every method on every
+  problem, one initial state by several methods;
 * :mod:`.iteration`: how fast an implicit step's stage iteration contracts;
 * :mod:`.oscillations`: exact and measured periods, spectra;
 * :mod:`.linearization`: equilibria, normal modes, the linearised motion.
@@ -31,17 +32,18 @@ from .accuracy import (
     windowed_energy_error,
 )
 from .comparison import (
+    SCIPY_METHODS,
+    AdaptiveRun,
     ComparisonRow,
     EnergyComparison,
     MethodComparison,
-    ReferenceRun,
     WorkPrecision,
     compare_energy,
     compare_methods,
     compare_trajectory,
-    dop853_run,
     dop853_work_precision,
     pendulum_name,
+    scipy_run,
     work_precision,
 )
 from .iteration import StageIteration, stage_contraction
@@ -56,20 +58,23 @@ from .linearization import (
 from .oscillations import dominant_frequencies, exact_period, oscillation_period, spectrum
 from .structure import (
     amplification,
+    finite_difference_jacobian,
     reversibility_error,
     stability_limit,
     step_jacobian,
+    symplectic_form_defect,
     symplecticity_defect,
 )
 
 __all__ = [
     "HIGH_ORDER_DTS",
     "ORDER_DTS",
+    "SCIPY_METHODS",
+    "AdaptiveRun",
     "ComparisonRow",
     "EnergyComparison",
     "MethodComparison",
     "OrderResult",
-    "ReferenceRun",
     "StageIteration",
     "WorkPrecision",
     "amplification",
@@ -77,12 +82,12 @@ __all__ = [
     "compare_methods",
     "compare_trajectory",
     "dominant_frequencies",
-    "dop853_run",
     "dop853_work_precision",
     "energy_growth",
     "equilibrium_angles",
     "exact_period",
     "find_equilibrium",
+    "finite_difference_jacobian",
     "global_error",
     "linearized_solution",
     "normal_mode_frequencies",
@@ -94,10 +99,12 @@ __all__ = [
     "reference_solution",
     "rest_state_at_energy",
     "reversibility_error",
+    "scipy_run",
     "spectrum",
     "stability_limit",
     "stage_contraction",
     "step_jacobian",
+    "symplectic_form_defect",
     "symplecticity_defect",
     "windowed_energy_error",
     "work_precision",

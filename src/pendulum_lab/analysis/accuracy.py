@@ -56,19 +56,23 @@ def reference_solution(model: PendulumModel, theta0, omega0=None, *, t_end: floa
         Relative and absolute tolerance of DOP853.
     """
     theta0, omega0 = velocity_state(model, theta0, omega0, p0)
-    sol = dop853(model, theta0, omega0, t_end, rtol)
+    sol = scipy_solution(model, theta0, omega0, t_end, rtol)
     return sol.y[: model.n, -1], sol.y[model.n :, -1]
 
 
-def dop853(model: PendulumModel, theta0: np.ndarray, omega0: np.ndarray, t_end: float,
-           rtol: float):
-    """``scipy.integrate.solve_ivp`` with DOP853 on ``(theta, omega)``, ``atol = rtol``."""
+def scipy_solution(model: PendulumModel, theta0: np.ndarray, omega0: np.ndarray, t_end: float,
+                   rtol: float, method: str = "DOP853"):
+    """``scipy.integrate.solve_ivp`` on ``(theta, omega)`` with ``atol = rtol`` (checked inputs).
+
+    The one place the package calls SciPy's adaptive solvers; ``method`` is
+    a SciPy method name (``"DOP853"``, ``"RK45"``).
+    """
     n = model.n
 
     def rhs(_t, y):
         return np.concatenate([y[n:], model.accelerations(y[:n], y[n:])])
 
-    return solve_ivp(rhs, (0.0, t_end), np.concatenate([theta0, omega0]), method="DOP853",
+    return solve_ivp(rhs, (0.0, t_end), np.concatenate([theta0, omega0]), method=method,
                      rtol=rtol, atol=rtol)
 
 

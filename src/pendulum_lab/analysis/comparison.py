@@ -1,4 +1,4 @@
-"""Comparing methods: work-precision, a DOP853 reference run, one table row per method.
+"""Comparing methods: work-precision, SciPy's adaptive solvers, one table row per method.
 
 Each function returns numbers a test or a notebook can assert on; the
 figures of these results are in :mod:`pendulum_lab.plotting` and their
@@ -19,30 +19,34 @@ from ..integrators import METHODS, ConvergenceError, get_method
 from ..model import PendulumModel
 from ..simulate import Trajectory, simulate, velocity_state
 from .accuracy import (
-    dop853,
     energy_growth,
     final_state_at,
     global_error,
     observed_order,
     order_steps,
     reference_solution,
+    scipy_solution,
 )
 from .structure import reversibility_error, symplecticity_defect
 
 __all__ = [
+    "SCIPY_METHODS",
+    "AdaptiveRun",
     "ComparisonRow",
     "EnergyComparison",
     "MethodComparison",
-    "ReferenceRun",
     "WorkPrecision",
     "compare_energy",
     "compare_methods",
     "compare_trajectory",
-    "dop853_run",
     "dop853_work_precision",
     "pendulum_name",
+    "scipy_run",
     "work_precision",
 ]
+
+#: The adaptive solvers of ``scipy.integrate.solve_ivp`` the course compares with.
+SCIPY_METHODS = ("RK45", "DOP853")
 
 
 @dataclass(frozen=True)
@@ -124,39 +128,63 @@ def work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float, d
 
 
 @dataclass(frozen=True)
-class ReferenceRun:
-    """A run of SciPy's adaptive DOP853.
+class AdaptiveRun:
+    """A run with variable steps: SciPy's adaptive solvers, or an adaptive geometric method.
 
     Attributes
     ----------
+    label : str
+        The method and its setting, for legends and tables.
     t : ndarray, shape (N+1,)
-        The solver's accepted step times.
-    theta, omega : ndarray, shape (N+1, n)
+        The accepted step times [s].
+    theta, p : ndarray, shape (N+1, n)
+        Angles and canonical momenta.
     energy_error : ndarray, shape (N+1,)
         ``E(t) - E(0)``.
-    rtol : float
-    wall_time : float
+    steps : int
+        Accepted steps.
     evaluations : int
-        Right-hand-side evaluations (``nfev``), each one acceleration.
+        Right-hand-side evaluations (SciPy: ``nfev``, one acceleration each)
+        or one-step calls (adaptive leapfrogs, counting rejected attempts
+        and error estimates).
+    wall_time : float
+        Seconds spent integrating.
     """
 
+    label: str
     t: np.ndarray
     theta: np.ndarray
-    omega: np.ndarray
+    p: np.ndarray
     energy_error: np.ndarray
-    rtol: float
-    wall_time: float
+    steps: int
     evaluations: int
+    wall_time: float
+
+    @property
+    def step_sizes(self) -> np.ndarray:
+        """``t[k+1] - t[k]``, shape (N,)."""
+        return np.diff(self.t)
+
+    @property
+    def drift(self) -> float:
+        """Slope [J/s] of a least-squares line through the energy error."""
+        return float(np.polyfit(self.t, self.energy_error, 1)[0])
+
+    def largest_error(self, start: float = 0.0, stop: float = np.inf) -> float:
+        """``max |E - E(0)|`` over ``start <= t <= stop``."""
+        inside = (self.t >= start) & (self.t <= stop)
+        return float(np.max(np.abs(self.energy_error[inside])))
 
 
-def dop853_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
-               rtol: float = 1e-10, p0=None) -> ReferenceRun:
-    """Integrate with ``scipy.integrate.solve_ivp(method="DOP853")``.
+def scipy_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
+              method: str = "DOP853", rtol: float = 1e-10, p0=None) -> AdaptiveRun:
+    """Integrate with ``scipy.integrate.solve_ivp``, keeping every accepted step.
 
-    This is the general-purpose adaptive eighth-order method a student would
-    otherwise reach for; it is neither symplectic nor fixed-step. It steps
-    ``(theta, omega)`` with the model's accelerations (one evaluation per
-    right-hand side, as for the velocity methods); ``atol`` equals ``rtol``.
+    These are the general-purpose adaptive methods a student would otherwise
+    reach for (DOP853: eighth order; RK45: Dormand-Prince 5(4)); neither is
+    symplectic nor fixed-step. They step ``(theta, omega)`` with the model's
+    accelerations (one evaluation per right-hand side, as for the velocity
+    methods); ``atol`` equals ``rtol``.
 
     Parameters
     ----------
@@ -165,23 +193,34 @@ def dop853_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
         The initial state (give ``omega0`` or ``p0``).
     t_end : float
         ``> 0``.
+    method : {"RK45", "DOP853"}
     rtol : float
         Relative (and absolute) tolerance, in ``[1e-14, 1e-2]``.
 
     Returns
     -------
-    ReferenceRun
+    AdaptiveRun
+        Labelled ``"<method>, rtol <rtol>"``.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> run = scipy_run(pl.simple_pendulum(), [1.0], [0.0], t_end=10.0, method="RK45", rtol=1e-6)
+    >>> run.label, bool(run.largest_error() < 1e-3)
+    ('RK45, rtol 1e-06', True)
     """
-    n = model.n
     theta0, omega0 = velocity_state(model, theta0, omega0, p0, single=True)
+    n = model.n
     t_end = check.positive_number("t_end", t_end)
+    method = check.choice("method", method, SCIPY_METHODS)
     rtol = check.number_in("rtol", rtol, 1e-14, 1e-2)
     start = time.perf_counter()
-    sol = dop853(model, theta0, omega0, t_end, rtol)
+    sol = scipy_solution(model, theta0, omega0, t_end, rtol, method)
     wall = time.perf_counter() - start
     theta, omega = sol.y[:n].T, sol.y[n:].T
     energy = model.energy(theta, omega)
-    return ReferenceRun(sol.t, theta, omega, energy - energy[0], rtol, wall, int(sol.nfev))
+    return AdaptiveRun(f"{method}, rtol {rtol:g}", sol.t, theta, model.momenta(theta, omega),
+                       energy - energy[0], len(sol.t) - 1, int(sol.nfev), wall)
 
 
 def dop853_work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float,
@@ -193,12 +232,13 @@ def dop853_work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: f
         reference = reference_solution(model, theta0, omega0, t_end=t_end, p0=p0)
     points = []
     for rtol in rtols:
-        runs = [dop853_run(model, theta0, omega0, t_end=t_end, rtol=rtol, p0=p0)
+        runs = [scipy_run(model, theta0, omega0, t_end=t_end, rtol=rtol, p0=p0)
                 for _ in range(repeats)]
         run = runs[0]
+        omega_end = model.velocities(run.theta[-1], run.p[-1])
         points.append(WorkPrecision("DOP853", float(rtol),
                                     float(np.max(np.abs(run.energy_error))),
-                                    global_error(run.theta[-1], run.omega[-1], reference),
+                                    global_error(run.theta[-1], omega_end, reference),
                                     min(r.wall_time for r in runs), run.evaluations, True))
     return points
 

@@ -30,19 +30,78 @@ from ..simulate import canonical_state, step
 
 __all__ = [
     "amplification",
+    "finite_difference_jacobian",
     "reversibility_error",
     "stability_limit",
     "step_jacobian",
+    "symplectic_form_defect",
     "symplecticity_defect",
 ]
 
 
-def _canonical_j(n: int) -> np.ndarray:
-    return np.block([[np.zeros((n, n)), np.eye(n)], [-np.eye(n), np.zeros((n, n))]])
+def finite_difference_jacobian(function, z, delta: float = 1e-6) -> np.ndarray:
+    """Jacobian of a map ``z -> function(z)`` of ``R^d`` by central differences.
+
+    Accurate to about ``delta^2`` times the third derivatives plus round-off
+    over ``delta``. :func:`step_jacobian` applies it to one step of a method;
+    use it directly for other maps (a variable step, a reference solver).
+
+    Parameters
+    ----------
+    function : callable
+        ``function(z)`` returns an array of shape ``(m,)`` for ``z`` of shape ``(d,)``.
+    z : array_like, shape (d,)
+    delta : float
+        The increment in each variable, ``> 0``.
+
+    Returns
+    -------
+    ndarray, shape (m, d)
+
+    Examples
+    --------
+    >>> finite_difference_jacobian(lambda z: np.array([z[0] * z[1], z[0]]), [2.0, 3.0]).round(8)
+    array([[3., 2.],
+           [1., 0.]])
+    """
+    if not callable(function):
+        raise TypeError(f"`function` must be callable, got {type(function).__name__}")
+    z = np.asarray(z, float)
+    if z.ndim != 1:
+        raise ValueError(f"`z` must be a 1-d array (one point), got shape {z.shape}")
+    delta = check.positive_number("delta", delta)
+    columns = []
+    for k in range(z.size):
+        dz = np.zeros(z.size)
+        dz[k] = delta
+        columns.append((np.asarray(function(z + dz), float)
+                        - np.asarray(function(z - dz), float)) / (2 * delta))
+    return np.array(columns).T
+
+
+def symplectic_form_defect(matrix) -> float:
+    """``max |Psi^T J Psi - J|`` for a ``(2n, 2n)`` matrix ``Psi`` in ``(q, p)`` order.
+
+    Zero exactly for a symplectic matrix. A unit determinant is necessary
+    but, for ``n >= 2``, not sufficient:
+
+    Examples
+    --------
+    >>> stretch = np.diag([2.0, 1.0, 1.0, 0.5])   # det 1, but q1 and p1 are not paired
+    >>> float(np.linalg.det(stretch)), symplectic_form_defect(stretch)
+    (1.0, 1.0)
+    """
+    psi = np.asarray(matrix, float)
+    dim = psi.shape[0] if psi.ndim == 2 else -1
+    if psi.shape != (dim, dim) or dim % 2:
+        raise ValueError(f"`matrix` must be square of even size (2n, 2n), got shape {psi.shape}")
+    n = dim // 2
+    j = np.block([[np.zeros((n, n)), np.eye(n)], [-np.eye(n), np.zeros((n, n))]])
+    return float(np.max(np.abs(psi.T @ j @ psi - j)))
 
 
 def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4",
-                  p0=None, eps: float = 1e-6) -> np.ndarray:
+                  p0=None, eps: float = 1e-6, variables: str = "canonical") -> np.ndarray:
     """Jacobian of one step ``(theta, p) -> (theta1, p1)`` by central differences.
 
     Parameters
@@ -55,6 +114,10 @@ def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, metho
     method : str or Method
     eps : float
         Finite-difference increment in each of the ``2n`` variables.
+    variables : {"canonical", "velocity"}
+        The coordinates the step is seen in: ``(theta, p)``, or ``(theta,
+        omega)`` with ``omega = M(theta)^-1 p`` (the same map, other
+        coordinates; symplectic in both only when ``M`` is constant).
 
     Returns
     -------
@@ -69,27 +132,33 @@ def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, metho
     """
     n = model.n
     theta0, p0 = canonical_state(model, theta0, omega0, p0)
-    z = np.concatenate([theta0, p0])
-    jac = np.empty((2 * n, 2 * n))
-    for k in range(2 * n):
-        dz = np.zeros(2 * n)
-        dz[k] = eps
-        plus = np.concatenate(step(model, (z + dz)[:n], p0=(z + dz)[n:], dt=dt, method=method))
-        minus = np.concatenate(step(model, (z - dz)[:n], p0=(z - dz)[n:], dt=dt, method=method))
-        jac[:, k] = (plus - minus) / (2 * eps)
-    return jac
+    if theta0.ndim != 1:
+        raise ValueError(f"`theta0` must have shape (n,) (one state), got {theta0.shape}")
+    if check.choice("variables", variables, ("canonical", "velocity")) == "velocity":
+
+        def one_step(z):
+            theta1, p1 = step(model, z[:n], z[n:], dt=dt, method=method)
+            return np.concatenate([theta1, model.velocities(theta1, p1)])
+
+        return finite_difference_jacobian(
+            one_step, np.concatenate([theta0, model.velocities(theta0, p0)]), eps)
+
+    def one_step(z):
+        return np.concatenate(step(model, z[:n], p0=z[n:], dt=dt, method=method))
+
+    return finite_difference_jacobian(one_step, np.concatenate([theta0, p0]), eps)
 
 
 def symplecticity_defect(model: PendulumModel, theta0, omega0=None, *, dt: float,
-                         method="glrk4", p0=None) -> float:
+                         method="glrk4", p0=None, variables: str = "canonical") -> float:
     """``max |Psi^T J Psi - J|`` for the Jacobian ``Psi`` of one step in ``(theta, p)``.
 
     Zero (to the finite-difference accuracy, about 1e-10) for a symplectic map.
-    Arguments as for :func:`step_jacobian`.
+    Arguments as for :func:`step_jacobian`; with ``variables="velocity"`` the
+    step is measured as a map of ``(theta, omega)``.
     """
-    psi = step_jacobian(model, theta0, omega0, dt=dt, method=method, p0=p0)
-    j = _canonical_j(model.n)
-    return float(np.max(np.abs(psi.T @ j @ psi - j)))
+    return symplectic_form_defect(step_jacobian(model, theta0, omega0, dt=dt, method=method,
+                                                p0=p0, variables=variables))
 
 
 def reversibility_error(model: PendulumModel, theta0, omega0=None, *, dt: float,

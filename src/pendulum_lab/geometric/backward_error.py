@@ -31,12 +31,12 @@ import numpy as np
 import sympy as sp
 
 from .. import _validation as check
-from .._validation import pendulum_model as check_model
 from ..analysis import exact_period
 from ..integrators import get_method
 from ..mechanics import derive_chain, is_identically_zero
 from ..model import PendulumModel
 from ..simulate import simulate
+from ._checks import conservative_model
 from .long_time import exact_libration
 from .modified_equations import (
     STEP_SIZE,
@@ -102,13 +102,6 @@ def _hamiltonian_method(model: PendulumModel, method) -> str:
             f"for a modified Hamiltonian, got {name!r}"
         )
     return name
-
-
-def _check_links(model: PendulumModel, supported) -> None:
-    if model.n not in supported:
-        raise ValueError(
-            f"`model` must have {' or '.join(map(str, supported))} link(s) here, got n = {model.n}"
-        )
 
 
 @functools.cache
@@ -227,9 +220,8 @@ def modified_hamiltonian(model: PendulumModel, method, order: int) -> sp.Expr:
     >>> sp.expand(h_tilde - pl.simple_pendulum().hamiltonian)
     -g*h*p*sin(theta)/(2*l)
     """
-    model = check_model(model)
+    model = conservative_model(model, MAX_ORDER)
     name = _hamiltonian_method(model, method)
-    _check_links(model, MAX_ORDER)
     order = _order(order, MAX_ORDER[model.n], f"for n = {model.n}")
     terms = _abstract_terms(name, model.n, model.separable, order)
     total = model.hamiltonian
@@ -265,8 +257,7 @@ def modified_equation(model: PendulumModel, method, order: int) -> list[sp.Matri
     >>> modified_equation(pl.simple_pendulum(), "explicit_euler", 1)[1].T
     Matrix([[g*sin(theta)/(2*l), g*p*cos(theta)/(2*l)]])
     """
-    model = check_model(model)
-    _check_links(model, (1,))
+    model = conservative_model(model, (1,))
     name = get_method(method).name
     name = VELOCITY_TWINS.get(name, name)
     if name == "glrk8":
@@ -333,7 +324,7 @@ def hamiltonian_function(model: PendulumModel, expr):
     ``theta`` and ``p`` have shape ``(..., n)``; the model's parameter values
     are put in. Lambdified once with common subexpressions shared.
     """
-    chain = model.chain
+    chain = conservative_model(model).chain
     args = (*chain.q, *chain.p, STEP_SIZE)
     expr = sp.sympify(expr).xreplace(model.parameter_values)
     fn = sp.lambdify(args, expr, modules="numpy", cse=True)
@@ -400,9 +391,11 @@ def modified_energy_orders(model: PendulumModel, method, theta0, omega0, *, dts,
     -------
     ModifiedEnergyOrders
     """
-    model = check_model(model)
+    model = conservative_model(model, MAX_ORDER)
     name = _hamiltonian_method(model, method)
-    orders = tuple(_order(k, MAX_ORDER.get(model.n, 0), f"for n = {model.n}") for k in orders)
+    orders = tuple(_order(k, MAX_ORDER[model.n], f"for n = {model.n}") for k in orders)
+    if not orders:
+        raise ValueError("`orders` must name at least one truncation order")
     dts = np.asarray([check.positive_number("dts", dt) for dt in dts])
     if dts.size < 2:
         raise ValueError(f"`dts` must hold at least two step sizes, got {dts.size}")
@@ -467,8 +460,7 @@ def first_dissipative_term(model: PendulumModel, method, max_power: int = 6) -> 
     >>> first_dissipative_term(pl.simple_pendulum(), "explicit_euler").power
     1
     """
-    model = check_model(model)
-    _check_links(model, (1,))
+    model = conservative_model(model, (1,))
     max_power = _order(max_power, MAX_FIELD_ORDER - 1, "for the modified equation")
     theta, p = model.chain.q[0], model.chain.p[0]
     fields = modified_equation(model, method, max_power)
@@ -541,6 +533,9 @@ def energy_drift(model: PendulumModel, method, amplitude: float, *, dts,
     term = first_dissipative_term(model, method)
     t_end = check.positive_number("t_end", t_end)
     dts = np.asarray([check.positive_number("dts", dt) for dt in dts])
+    if dts.size < 2:
+        raise ValueError(f"`dts` must hold at least two step sizes (for the exponent), got "
+                         f"{dts.size}")
     period = exact_period(model, amplitude)
     times = np.arange(512) * period / 512
     theta, p = exact_libration(model, amplitude, times)

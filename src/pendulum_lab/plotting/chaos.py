@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
 from .. import _validation as check
-from .figures import get_axes, new_figure
+from .figures import axis_label, get_axes, new_figure, subscript
 
 __all__ = [
     "plot_flip_map",
@@ -35,7 +35,7 @@ def plot_separation(sep, ax: Axes | None = None, label=None, **kwargs) -> Figure
     """Distance against time on a log scale, for a :class:`~pendulum_lab.chaos.Separation`."""
     ax = get_axes(ax)
     ax.semilogy(sep.t, sep.distance, label=label, **kwargs)
-    ax.set(xlabel="t (s)", ylabel="distance in (theta, p)")
+    ax.set(xlabel=axis_label("t"), ylabel="distance in (θ, p)")
     if label is not None:
         ax.legend(fontsize="small")
     return ax.figure
@@ -52,7 +52,7 @@ def plot_lyapunov(estimate, ax: Axes | None = None, label=None, **kwargs) -> Fig
     lines = ax.semilogx(estimate.t, estimate.running.reshape(len(estimate.t), -1), **kwargs)
     lines[0].set_label(label)
     ax.axhline(0.0, color="0.6", lw=0.8)
-    ax.set(xlabel="t (s)", ylabel="running estimate of lambda_1 (1/s)")
+    ax.set(xlabel=axis_label("t"), ylabel="running estimate of lambda_1 (1/s)")
     ax.legend(fontsize="small")
     return ax.figure
 
@@ -108,7 +108,8 @@ def plot_section(section, ax: Axes | None = None, link: int | None = None, s: fl
     ax.scatter(
         x, y, c=section.orbit % 20, s=s, cmap="tab20", vmin=0, vmax=19, linewidths=0, **kwargs
     )
-    ax.set(xlabel=f"theta{link + 1} (rad)", ylabel=f"p{link + 1} (kg m^2/s)")
+    sub = subscript(link + 1)
+    ax.set(xlabel=axis_label("theta", sub), ylabel=axis_label("p", sub))
     return ax.figure
 
 
@@ -192,7 +193,7 @@ def plot_small_angle(comparison, ax: Axes | None = None, member=()) -> Figure:
     parting = np.asarray(comparison.parting_time)[member]
     if np.isfinite(parting):
         ax.axvline(parting, color="k", lw=0.8, ls=":", label="they part")
-    ax.set(xlabel="t (s)", ylabel="angle (rad)")
+    ax.set(xlabel=axis_label("t"), ylabel="angle (rad)")
     ax.legend(fontsize="small", ncol=2)
     return ax.figure
 

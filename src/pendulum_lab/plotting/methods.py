@@ -10,8 +10,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from .. import _validation as check
-from ..analysis import EnergyComparison, OrderResult, ReferenceRun
-from .figures import get_axes
+from ..analysis import AdaptiveRun, EnergyComparison, OrderResult
+from .figures import axis_label, get_axes
 
 __all__ = [
     "plot_amplification",
@@ -24,9 +24,7 @@ __all__ = [
 
 
 def _run_label(run) -> str:
-    if isinstance(run, ReferenceRun):
-        return f"DOP853, rtol = {run.rtol:g}"
-    return run.method.name
+    return run.label if isinstance(run, AdaptiveRun) else run.method.name
 
 
 def plot_energy_error_growth(runs, ax: Axes | None = None, labels=None) -> Figure:
@@ -35,11 +33,11 @@ def plot_energy_error_growth(runs, ax: Axes | None = None, labels=None) -> Figur
     The running maximum is flat once a bounded error has reached its bound
     and keeps rising for a drifting one; the raw error oscillates too fast to
     read over a long run. The course report's velocity-variable methods are
-    dashed, DOP853 dotted.
+    dashed, adaptive runs (SciPy's DOP853) dotted.
 
     Parameters
     ----------
-    runs : sequence of Trajectory or ReferenceRun
+    runs : sequence of Trajectory or AdaptiveRun
         Single trajectories.
     ax : Axes, optional
     labels : sequence of str, optional
@@ -57,13 +55,13 @@ def plot_energy_error_growth(runs, ax: Axes | None = None, labels=None) -> Figur
         if np.ndim(run.energy_error) != 1:
             raise ValueError("`runs` must be single trajectories, got an ensemble")
         worst = np.maximum.accumulate(np.abs(run.energy_error[1:]))
-        if isinstance(run, ReferenceRun):
+        if isinstance(run, AdaptiveRun):
             style = ":"
         else:
             style = "--" if run.method.variables == "velocity" else "-"
         ax.plot(run.t[1:], np.where(worst > 0, worst, np.nan), style, lw=1.4, label=label)
     ax.set_yscale("log")
-    ax.set(xlabel="t (s)", ylabel="largest |E(s) - E(0)| for s <= t (J)")
+    ax.set(xlabel=axis_label("t"), ylabel="largest |E(s) - E(0)| for s <= t (J)")
     ax.legend(fontsize="small", ncols=2)
     return ax.figure
 
@@ -207,7 +205,7 @@ def plot_energy_comparison(comparison: EnergyComparison, ax: Axes | None = None)
     for name, traj in comparison.trajectories.items():
         err = np.abs(traj.relative_energy_error)
         ax.semilogy(traj.t, np.where(err > 0, err, np.nan), label=name, lw=1)
-    ax.set(xlabel="t (s)", ylabel="|E - E(0)| / |E(0)|")
+    ax.set(xlabel=axis_label("t"), ylabel="|E - E(0)| / |E(0)|")
     ax.legend(fontsize="small")
     return ax.figure
 

@@ -38,6 +38,7 @@ from .figures import (
     ROTATION,
     SEPARATRIX,
     TOTAL,
+    axis_label,
     broken_at_wraps,
     get_axes,
     link_label,
@@ -81,7 +82,7 @@ def plot_energy(traj: Trajectory, ax: Axes | None = None) -> Figure:
     ax.plot(traj.t, traj.potential, color=POTENTIAL, label="potential V")
     ax.plot(traj.t, traj.energy, color=TOTAL, lw=2, label="total E = T + V")
     ax.set(
-        xlabel="t (s)",
+        xlabel=axis_label("t"),
         ylabel="energy (J)",
         title=f"Energy ({traj.method.name}, dt = {traj.dt:g} s)",
     )
@@ -102,7 +103,7 @@ def plot_energy_error(traj: Trajectory, ax: Axes | None = None, relative: bool =
     if np.any(np.isfinite(shown)):
         ax.set_yscale("log")
     ylabel = "|E - E(0)| / |E(0)|" if relative else "|E - E(0)| (J)"
-    ax.set(xlabel="t (s)", ylabel=ylabel, title=f"Energy error ({traj.method.name})")
+    ax.set(xlabel=axis_label("t"), ylabel=ylabel, title=f"Energy error ({traj.method.name})")
     return ax.figure
 
 
@@ -113,7 +114,7 @@ def plot_angles(traj: Trajectory, ax: Axes | None = None) -> Figure:
     n = traj.theta.shape[1]
     for i in range(n):
         ax.plot(traj.t, traj.theta[:, i], label=f"θ{link_label(i, n)}")
-    ax.set(xlabel="t (s)", ylabel="angle (rad)", title="Angles")
+    ax.set(xlabel=axis_label("t"), ylabel="angle (rad)", title="Angles")
     if n > 1:
         ax.legend(loc="upper right", fontsize="small")
     return ax.figure
@@ -141,8 +142,8 @@ def plot_phase(traj: Trajectory, ax: Axes | None = None, link: int | None = None
     single_link = len(links) == 1 and n > 1
     sub = link_label(links[0], n) if len(links) == 1 else "ᵢ"
     ax.set(
-        xlabel=f"θ{sub} (rad)",
-        ylabel=f"ω{sub} (rad/s)",
+        xlabel=axis_label("theta", sub),
+        ylabel=axis_label("omega", sub),
         title=f"Arm {links[0] + 1}" if single_link else "Phase space",
         xlim=(-np.pi, np.pi),
     )
@@ -251,8 +252,8 @@ def plot_phase_portrait(
         ax.plot(x, y, color="black", lw=2.2, label="trajectory")
         ax.plot(x[0], y[0], "o", color="gold", mec="black", ms=9, zorder=5)
     ax.set(
-        xlabel="θ (rad)",
-        ylabel="ω (rad/s)",
+        xlabel=axis_label("theta"),
+        ylabel=axis_label("omega"),
         xlim=(-np.pi, np.pi),
         ylim=(-omega_max, omega_max),
         title="Phase portrait of the simple pendulum",
@@ -415,7 +416,7 @@ def plot_linear_vs_nonlinear(
                 color=f"C{i}",
                 label=f"θ{link_label(i, n)} − θ{link_label(i, n)}*",
             )
-        ax.set(xlabel="t (s)", title=f"{title} near {eq.name}")
+        ax.set(xlabel=axis_label("t"), title=f"{title} near {eq.name}")
         ax.legend(loc="upper left", fontsize="small")
     axes[0].set_ylabel("offset from equilibrium (rad)")
     return axes[0].figure
