@@ -10,7 +10,9 @@ prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
 * :mod:`.comparison`: work-precision, a DOP853 run, one table row per method,
   one initial state by several methods;
 * :mod:`.oscillations`: exact and measured periods, spectra;
-* :mod:`.linearization`: equilibria, normal modes, the linearised motion.
+* :mod:`.linearization`: equilibria, normal modes, the linearised motion;
+* :mod:`.damping`: area contraction and the decay of energy under damping,
+  by method and step.
 """
 
 from .accuracy import (
@@ -35,6 +37,7 @@ from .comparison import (
     pendulum_name,
     work_precision,
 )
+from .damping import EnergyDecay, LinearDecay, energy_decay, linear_decay
 from .linearization import (
     equilibrium_angles,
     find_equilibrium,
@@ -50,6 +53,8 @@ __all__ = [
     "ORDER_DTS",
     "ComparisonRow",
     "EnergyComparison",
+    "EnergyDecay",
+    "LinearDecay",
     "OrderResult",
     "ReferenceRun",
     "WorkPrecision",
@@ -58,10 +63,12 @@ __all__ = [
     "dominant_frequencies",
     "dop853_run",
     "dop853_work_precision",
+    "energy_decay",
     "energy_growth",
     "equilibrium_angles",
     "exact_period",
     "find_equilibrium",
+    "linear_decay",
     "linearized_solution",
     "normal_mode_frequencies",
     "observed_order",

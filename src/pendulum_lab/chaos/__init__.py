@@ -1,4 +1,4 @@
-"""Chaos in the double pendulum, and longer chains.
+"""Chaos in the double pendulum, longer chains and the damped, driven pendulum.
 
 The course report (Kanoun, Cowley, Ivachtchenko, MAT332, 2024) observes that
 small changes of the initial conditions of the double pendulum give radically
@@ -8,14 +8,20 @@ module:
 * :mod:`.separation`: phase-space distance of two nearby trajectories
   (:func:`separation`);
 * :mod:`.lyapunov`: the largest Lyapunov exponent by two independent methods
-  (:func:`lyapunov_benettin`, :func:`lyapunov_variational`);
+  (:func:`lyapunov_benettin`, :func:`lyapunov_variational`), and all of them
+  (:func:`lyapunov_spectrum`), for damped and driven fields too;
 * :mod:`.sections`: Poincare sections on energy levels, crossings located to
   round-off (:func:`section_states`, :func:`poincare_section`,
   :func:`energy_sections`);
 * :mod:`.flips`: Heyl's flip-time fractal (:func:`can_flip`,
   :func:`flip_time_map`);
 * :mod:`.small_angles`: where the linearised and the full motion part
-  (:func:`small_angle_comparison`).
+  (:func:`small_angle_comparison`);
+* :mod:`.stroboscopic`, :mod:`.bifurcation`, :mod:`.basins`: the damped,
+  driven pendulum sampled once per drive period
+  (:func:`stroboscopic_section`, :func:`orbit_periods`), against a
+  parameter (:func:`bifurcation_diagram`), and which attractor each start
+  ends on (:func:`basins_of_attraction`).
 
 Every trajectory comes from :func:`pendulum_lab.simulate` (an ensemble is a
 batch of initial states) or, for runs examined piece by piece, from
@@ -30,25 +36,44 @@ Phase-space distances are Euclidean in the canonical variables
 depend on that choice of norm; finite-time estimates do, a little.
 """
 
+from .basins import Basins, basins_of_attraction
+from .bifurcation import BifurcationDiagram, PeriodDoubling, bifurcation_diagram
 from .flips import FlipMap, can_flip, flip_time_map
-from .lyapunov import LyapunovEstimate, lyapunov_benettin, lyapunov_variational
+from .lyapunov import (
+    LyapunovEstimate,
+    LyapunovSpectrum,
+    lyapunov_benettin,
+    lyapunov_spectrum,
+    lyapunov_variational,
+)
 from .sections import PoincareSection, energy_sections, poincare_section, section_states
 from .separation import Separation, separation
 from .small_angles import SmallAngleComparison, small_angle_comparison
+from .stroboscopic import StroboscopicSection, orbit_periods, stroboscopic_section
 
 __all__ = [
+    "Basins",
+    "BifurcationDiagram",
     "FlipMap",
     "LyapunovEstimate",
+    "LyapunovSpectrum",
+    "PeriodDoubling",
     "PoincareSection",
     "Separation",
     "SmallAngleComparison",
+    "StroboscopicSection",
+    "basins_of_attraction",
+    "bifurcation_diagram",
     "can_flip",
     "energy_sections",
     "flip_time_map",
     "lyapunov_benettin",
+    "lyapunov_spectrum",
     "lyapunov_variational",
+    "orbit_periods",
     "poincare_section",
     "section_states",
     "separation",
     "small_angle_comparison",
+    "stroboscopic_section",
 ]

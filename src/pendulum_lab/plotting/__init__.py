@@ -8,20 +8,25 @@ and a test can inspect the artists under any backend. By topic:
 * :mod:`.figures`: new figures, the one axes helper, link subscripts, colours;
 * :mod:`.trajectories`: energies, angles, phase space, the chain, the
   explorers' :data:`PANELS`;
-* :mod:`.methods`: observed order, energy error growth, work-precision;
+* :mod:`.methods`: observed order, energy error growth, work-precision, the
+  decay of energy under damping;
 * :mod:`.chaos`: separation, Lyapunov exponents, Poincare sections, the
-  flip-time map, the small-angle comparison.
+  flip-time map, the small-angle comparison;
+* :mod:`.driven`: stroboscopic sections, bifurcation diagrams, basins of
+  attraction of the driven pendulum.
 """
 
 from .chaos import (
     plot_flip_map,
     plot_lyapunov,
+    plot_lyapunov_spectrum,
     plot_parting,
     plot_section,
     plot_sections,
     plot_separation,
     plot_small_angle,
 )
+from .driven import plot_basins, plot_bifurcation, plot_stroboscopic
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -37,6 +42,7 @@ from .figures import (
 )
 from .methods import (
     plot_energy_comparison,
+    plot_energy_decay,
     plot_energy_error_growth,
     plot_order,
     plot_work_precision,
@@ -70,14 +76,18 @@ __all__ = [
     "link_label",
     "new_figure",
     "plot_angles",
+    "plot_basins",
+    "plot_bifurcation",
     "plot_energy",
     "plot_energy_comparison",
+    "plot_energy_decay",
     "plot_energy_error",
     "plot_energy_error_growth",
     "plot_flip_map",
     "plot_linear_vs_nonlinear",
     "plot_link_projections",
     "plot_lyapunov",
+    "plot_lyapunov_spectrum",
     "plot_order",
     "plot_parting",
     "plot_period_vs_amplitude",
@@ -88,6 +98,7 @@ __all__ = [
     "plot_separation",
     "plot_small_angle",
     "plot_spectrum",
+    "plot_stroboscopic",
     "plot_work_precision",
     "subscript",
     "wrap_angle",

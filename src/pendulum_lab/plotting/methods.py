@@ -1,4 +1,5 @@
-"""Figures that compare integrators: observed order, energy error growth, work-precision."""
+"""Figures that compare integrators: observed order, energy error growth, work-precision,
+the decay of energy under damping."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from .figures import get_axes
 
 __all__ = [
     "plot_energy_comparison",
+    "plot_energy_decay",
     "plot_energy_error_growth",
     "plot_order",
     "plot_work_precision",
@@ -152,5 +154,25 @@ def plot_energy_comparison(comparison: EnergyComparison, ax: Axes | None = None)
         err = np.abs(traj.relative_energy_error)
         ax.semilogy(traj.t, np.where(err > 0, err, np.nan), label=name, lw=1)
     ax.set(xlabel="t (s)", ylabel="|E - E(0)| / |E(0)|")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_energy_decay(decay, dt: float | None = None, ax: Axes | None = None) -> Figure:
+    """Energy above the rest state against time, log scale, from an ``EnergyDecay``.
+
+    One line per method at step ``dt`` (the largest of ``decay.dt`` by
+    default), the reference dashed.
+    """
+    ax = get_axes(ax, width=7.0, height=3.6)
+    index = int(np.argmax(decay.dt)) if dt is None else int(np.argmin(np.abs(decay.dt - dt)))
+    ref = decay.reference
+    ax.semilogy(ref.t, ref.energy - decay.rest_energy, "k--", lw=1,
+                label=f"reference ({ref.method.name}, dt = {ref.dt:g} s)")
+    for name in decay.methods:
+        traj = decay.trajectories[name][index]
+        ax.semilogy(traj.t, traj.energy - decay.rest_energy, lw=1.2,
+                    label=f"{name}, dt = {traj.dt:g} s")
+    ax.set(xlabel="t (s)", ylabel="E - E(rest) (J)")
     ax.legend(fontsize="small")
     return ax.figure
