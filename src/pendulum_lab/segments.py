@@ -8,7 +8,10 @@ dropped. :func:`simulate_segments` cuts a run into consecutive
 * each segment starts exactly where the previous one ended, in the method's
   own variables (``(theta, p)`` for the canonical methods), and at the right
   time ``t`` (the ``t0`` of its :func:`~pendulum_lab.simulate` call), so the
-  segmented run is the same run as one long call, to the last bit;
+  segmented run is the same run as one long call, to the last bit (for a
+  field that depends on time, a driven one, up to the rounding of the step
+  times: a segment counts ``t0 + (s - 1) dt`` from its own start, which can
+  differ from the long call's in the last bit);
 * the steps are counted once, by :func:`~pendulum_lab.step_count`, and one
   progress bar covers the whole run;
 * between segments the caller may drop ensemble members it is done with

@@ -43,6 +43,9 @@ class Basins:
         up to ``max_period`` (chaotic, longer, or not settled).
     attractors : tuple of ndarray, each shape (p, 2)
         Each attractor's stroboscopic points ``(theta, omega)``, ``p`` its period.
+    turns : tuple of float
+        Each attractor's mean full turns per drive period (0: it oscillates;
+        +-1: it goes over the top once per period, one way or the other).
     tolerance : float
         Two samples closer than this (max-norm) are the same point.
     transient_periods, max_period : int
@@ -54,6 +57,7 @@ class Basins:
     omega0: np.ndarray
     label: np.ndarray
     attractors: tuple
+    turns: tuple
     tolerance: float
     transient_periods: int
     max_period: int
@@ -134,7 +138,7 @@ def basins_of_attraction(
     theta, omega = section.theta[..., 0], section.omega[..., 0]
     periods = orbit_periods(section.theta, section.omega, tolerance, max_period)
     label = np.full(periods.shape, -1)
-    attractors = []
+    attractors, turns = [], []
     pending = periods > 0
     while np.any(pending):
         first = tuple(np.argwhere(pending)[0])
@@ -147,5 +151,6 @@ def basins_of_attraction(
         label[joins] = len(attractors)
         pending &= ~joins
         attractors.append(points)
-    return Basins(axes[0], axes[1], label, tuple(attractors), tolerance, transient_periods,
-                  max_period, section.method, time.perf_counter() - start)
+        turns.append(float(np.round(section.turns[(*first, 0)], 6)) + 0.0)
+    return Basins(axes[0], axes[1], label, tuple(attractors), tuple(turns), tolerance,
+                  transient_periods, max_period, section.method, time.perf_counter() - start)

@@ -115,6 +115,10 @@ class StroboscopicSection:
         Angles wrapped to ``(-pi, pi]`` [rad]; ``...`` is the ensemble shape.
     omega, p : ndarray, shape (S, ..., n)
         Angular velocities [rad/s] and canonical momenta.
+    turns : ndarray, shape (..., n)
+        Mean number of full turns per drive period over the samples (the
+        angles unwrapped): 0 for an oscillation, +-1 for a pendulum that goes
+        over the top once per period (NaN with one sample).
     drive_period : float
     steps_per_period, transient_periods : int
     method : str
@@ -124,6 +128,7 @@ class StroboscopicSection:
     theta: np.ndarray
     omega: np.ndarray
     p: np.ndarray
+    turns: np.ndarray
     drive_period: float
     steps_per_period: int
     transient_periods: int
@@ -215,5 +220,8 @@ def stroboscopic_section(
                                  *(getattr(s, name)[1:] for s in parts)])[kept]
         return joined.reshape(len(t), *run.batch_shape, model.n)
 
-    return StroboscopicSection(t, wrap_angle(samples("theta")), samples("omega"), samples("p"),
+    theta = samples("theta")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        turns = (theta[-1] - theta[0]) / (2 * np.pi * (len(t) - 1))
+    return StroboscopicSection(t, wrap_angle(theta), samples("omega"), samples("p"), turns,
                                period, steps_per_period, transient_periods, run.method.name)

@@ -107,7 +107,8 @@ def plot_basins(basins, ax: Axes | None = None, s: float = 30.0) -> Figure:
     for k, points in enumerate(basins.attractors):
         ax.scatter(points[:, 0], points[:, 1], s=s, marker=markers[k % len(markers)],
                    color=BASIN_COLOURS[k % len(BASIN_COLOURS)], edgecolors="k", zorder=3,
-                   label=f"attractor {k} (period {len(points)}): {basins.fractions[k]:.0%}")
+                   label=f"attractor {k}: period {len(points)}, {basins.turns[k]:+g} turns "
+                         f"per period, {basins.fractions[k]:.0%} of starts")
     ax.set(xlabel="theta(0) (rad)", ylabel="omega(0) (rad/s)")
     ax.legend(fontsize="small", loc="upper right")
     return ax.figure
