@@ -55,9 +55,7 @@ def test_a_family_in_segments_is_the_same_run():
     whole = pl.simulate(family, theta0, np.zeros_like(theta0), t_end=4.0, dt=0.02, method="rk4")
     run = pl.simulate_segments(family, theta0, np.zeros_like(theta0), t_end=4.0, dt=0.02,
                                method="rk4", segment_steps=30)
-    last = None
-    for last in run:
-        pass
+    last = list(run)[-1]
     # the same steps; only the step times of a driven run may round differently
     assert np.allclose(last.theta[-1], whole.theta[-1], rtol=0, atol=1e-14)
     assert np.allclose(last.omega[-1], whole.omega[-1], rtol=0, atol=1e-14)
