@@ -77,6 +77,12 @@ class Config:
     flip_t_end: float = 10.0
     limit_members: int = 4000  # item 6: ensemble verified against the C loop
     limit_steps: int = 200
+    bif_values: int = 600  # item 7: amplitudes of the bifurcation diagram
+    bif_periods: int = 300  # sampled drive periods
+    bif_transient: int = 300  # drive periods before the samples
+    bif_steps_per_period: int = 100
+    bif_rounds: int = 2
+    bif_c_members: int = 20  # members the C loop runs for its time per step
 
 
 FULL = Config("full")
@@ -98,6 +104,11 @@ QUICK = replace(
     flip_size=40,
     flip_t_end=5.0,
     limit_members=400,
+    bif_values=120,
+    bif_periods=60,
+    bif_transient=60,
+    bif_rounds=1,
+    bif_c_members=10,
 )
 SMOKE = replace(
     FULL,
@@ -124,6 +135,12 @@ SMOKE = replace(
     flip_t_end=1.0,
     limit_members=16,
     limit_steps=10,
+    bif_values=4,
+    bif_periods=2,
+    bif_transient=2,
+    bif_steps_per_period=10,
+    bif_rounds=1,
+    bif_c_members=2,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

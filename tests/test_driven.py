@@ -304,6 +304,9 @@ def test_period_doublings_are_found_in_the_data():
     assert found == [(1, 1.06, 1.075), (2, 1.075, 1.0816)]
     # negative control: a jump limit below the splitting finds none
     assert result.doublings(max_jump=1e-6) == []
+    windows = [(w.first, w.last, w.periods) for w in result.windows()]
+    assert windows == [(1.06, 1.06, (1,)), (1.075, 1.075, (2,)), (1.0816, 1.0816, (3, 4)),
+                       (1.2, 1.2, ())]
 
 
 def test_a_jump_to_a_distant_orbit_of_twice_the_period_is_no_doubling():
@@ -312,7 +315,8 @@ def test_a_jump_to_a_distant_orbit_of_twice_the_period_is_no_doubling():
         omega = np.concatenate([np.full((32, 1, 1, 1), 1.0),
                                 omega_after + 0.05 * (-1.0) ** k], axis=1)
         return BifurcationDiagram("drive_amplitude", np.array([1.0, 1.1]), np.zeros_like(omega),
-                                  omega, np.array([[1], [2]]), 1e-4, 16, "omega", 0, "rk4", 0.0)
+                                  omega, np.array([[1], [2]]), np.zeros((2, 1, 1)), 1e-4, 16,
+                                  "omega", 0, "rk4", 0.0)
     assert len(synthetic(1.0).doublings()) == 1  # split in two near the old point
     assert synthetic(2.5).doublings() == []  # negative control: far away
 
@@ -392,7 +396,9 @@ def test_conformal_step_decays_small_swings_at_exactly_the_true_rate():
 def test_large_swings_decay_only_to_the_order_of_the_method():
     decay = energy_decay(DAMPED, [2.5], [0.0], t_end=32.0, dts=[0.4, 0.2, 0.1])
     orders = dict(zip(decay.methods, decay.orders))
+    local = dict(zip(decay.methods, decay.local_orders[:, -1]))
     assert abs(orders["conformal_leapfrog"] - 2) < 0.2
+    assert abs(local["conformal_leapfrog"] - 2) < 0.1
     assert abs(orders["rk4"] - 4) < 0.3  # negative control: a fourth-order method
     small = energy_decay(DAMPED, [0.05], [0.0], t_end=32.0, dts=[0.8],
                          methods=["conformal_leapfrog", "rk4"])

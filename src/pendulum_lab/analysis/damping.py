@@ -180,6 +180,7 @@ class EnergyDecay:
     reference : Trajectory
     rest_energy : float
         The energy at rest, hanging [J].
+    model : PendulumModel
     """
 
     methods: tuple
@@ -189,6 +190,7 @@ class EnergyDecay:
     trajectories: dict
     reference: Trajectory
     rest_energy: float
+    model: PendulumModel
 
     @property
     def error(self) -> np.ndarray:
@@ -200,8 +202,18 @@ class EnergyDecay:
         """Slope of ``log(error)`` against ``log(dt)`` for each method, shape ``(M,)``."""
         return np.array([np.polyfit(np.log(self.dt), np.log(e), 1)[0] for e in self.error])
 
+    @property
+    def local_orders(self) -> np.ndarray:
+        """``log(e_i / e_{i+1}) / log(dt_i / dt_{i+1})`` between neighbouring steps, ``(M, D-1)``.
+
+        Where they settle shows the asymptotic order; the first ones may be
+        pre-asymptotic.
+        """
+        return np.log(self.error[:, :-1] / self.error[:, 1:]) / np.log(self.dt[:-1] / self.dt[1:])
+
     def plot(self, dt: float | None = None, ax=None):
-        """Energy above rest against time (log scale) at step ``dt`` (the largest by default)."""
+        """Energy at each turning point over the reference's, at step ``dt`` (the largest by
+        default); returns the Figure."""
         from ..plotting import plot_energy_decay
 
         return plot_energy_decay(self, dt=dt, ax=ax)
@@ -267,4 +279,4 @@ def energy_decay(
     trajectories = {m: [run(m, dt) for dt in dts] for m in methods}
     rates = np.array([[decay_rate(model, traj) for traj in trajectories[m]] for m in methods])
     return EnergyDecay(methods, dts, rates, decay_rate(model, reference), trajectories,
-                       reference, float(model.potential_energy(np.zeros(1))))
+                       reference, float(model.potential_energy(np.zeros(1))), model)

@@ -37,7 +37,7 @@ depend on that choice of norm; finite-time estimates do, a little.
 """
 
 from .basins import Basins, basins_of_attraction
-from .bifurcation import BifurcationDiagram, PeriodDoubling, bifurcation_diagram
+from .bifurcation import BifurcationDiagram, PeriodDoubling, PeriodWindow, bifurcation_diagram
 from .flips import FlipMap, can_flip, flip_time_map
 from .lyapunov import (
     LyapunovEstimate,
@@ -58,6 +58,7 @@ __all__ = [
     "LyapunovEstimate",
     "LyapunovSpectrum",
     "PeriodDoubling",
+    "PeriodWindow",
     "PoincareSection",
     "Separation",
     "SmallAngleComparison",

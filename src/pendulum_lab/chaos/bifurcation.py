@@ -32,7 +32,7 @@ from ..family import FAMILY_PARAMETERS
 from ..model import PendulumModel
 from .stroboscopic import PERIOD_TOLERANCE, orbit_periods, stroboscopic_section
 
-__all__ = ["BifurcationDiagram", "PeriodDoubling", "bifurcation_diagram"]
+__all__ = ["BifurcationDiagram", "PeriodDoubling", "PeriodWindow", "bifurcation_diagram"]
 
 #: Default of :meth:`BifurcationDiagram.doublings`: how far (max-norm in wrapped
 #: theta [rad] and omega [rad/s]) a doubled orbit's points may lie from the old ones.
@@ -58,6 +58,27 @@ class PeriodDoubling:
 
 
 @dataclass(frozen=True)
+class PeriodWindow:
+    """A run of neighbouring parameter values with the same detected periods.
+
+    Attributes
+    ----------
+    first, last : float
+        The first and last value of the run.
+    periods : tuple of int
+        The distinct periods the initial states found there, ascending; empty
+        where none found a period (chaos, or periods beyond ``max_period``).
+    count : int
+        How many values the run holds.
+    """
+
+    first: float
+    last: float
+    periods: tuple
+    count: int
+
+
+@dataclass(frozen=True)
 class BifurcationDiagram:
     """Stroboscopic samples of a driven pendulum against a parameter.
 
@@ -71,6 +92,9 @@ class BifurcationDiagram:
     periods : ndarray of int, shape (V, B)
         The period of each orbit (:func:`~pendulum_lab.chaos.orbit_periods`;
         0: none up to ``max_period``).
+    turns : ndarray, shape (V, B, n)
+        Mean full turns per drive period over the samples (0: the pendulum
+        oscillates; +-1: it goes over the top once per period).
     tolerance : float
         The tolerance the periods were detected with.
     max_period : int
@@ -88,6 +112,7 @@ class BifurcationDiagram:
     theta: np.ndarray
     omega: np.ndarray
     periods: np.ndarray
+    turns: np.ndarray
     tolerance: float
     max_period: int
     variable: str
@@ -99,6 +124,23 @@ class BifurcationDiagram:
     def points(self) -> np.ndarray:
         """The plotted coordinate, shape ``(S, V, B)``."""
         return getattr(self, self.variable)[..., self.link]
+
+    def windows(self, min_count: int = 1) -> list[PeriodWindow]:
+        """The values grouped into runs with the same set of detected periods, in order.
+
+        Runs shorter than ``min_count`` values are left out (in a chaotic range
+        single values flicker between "no period" and a long one).
+        """
+        min_count = check.integer_at_least("min_count", min_count, 1)
+        found = [tuple(sorted(set(row[row > 0].tolist()))) for row in self.periods]
+        runs, start = [], 0
+        for i in range(1, len(found) + 1):
+            if i == len(found) or found[i] != found[start]:
+                if i - start >= min_count:
+                    runs.append(PeriodWindow(float(self.values[start]),
+                                             float(self.values[i - 1]), found[start], i - start))
+                start = i
+        return runs
 
     def doublings(self, max_jump: float = MAX_JUMP) -> list[PeriodDoubling]:
         """The period doublings the data show, in order of the parameter.
@@ -277,6 +319,6 @@ def bifurcation_diagram(
     )
     omega = section.omega / scale
     periods = orbit_periods(section.theta, omega, tolerance, max_period)
-    return BifurcationDiagram(parameter, values, section.theta, omega, periods, tolerance,
-                              max_period, variable, link, section.method,
+    return BifurcationDiagram(parameter, values, section.theta, omega, periods, section.turns,
+                              tolerance, max_period, variable, link, section.method,
                               time.perf_counter() - start)

@@ -70,13 +70,14 @@ def plot_bifurcation(diagram, ax: Axes | None = None, lyapunov=None,
     if mark_doublings:
         for k, doubling in enumerate(diagram.doublings()):
             for each in axes:
-                each.axvline(doubling.value, color="tab:red", lw=0.8, ls="--",
-                             label="period doubling" if k == 0 and each is ax else None)
+                each.axvline(doubling.value, color="tab:red", lw=0.8, ls="--")
+            # staggered, so that labels of close doublings do not overlap
             ax.annotate(f"{doubling.period}\u2192{2 * doubling.period}", (doubling.value, 1.0),
-                        xycoords=("data", "axes fraction"), xytext=(2, -10),
+                        xycoords=("data", "axes fraction"), xytext=(2, -10 - 9 * (k % 3)),
                         textcoords="offset points", fontsize="x-small", color="tab:red")
         if diagram.doublings():
-            ax.legend(fontsize="small", loc="lower right")
+            ax.set_title("dashed: period doublings found in the data", fontsize="small",
+                         color="tab:red")
     if lyapunov is not None:
         # a LyapunovSpectrum's first exponent, or a LyapunovEstimate's exponent
         largest = getattr(lyapunov, "largest", None)
