@@ -258,23 +258,35 @@ def _magnus_propagators(model, traj: Trajectory, dt: float) -> np.ndarray:
     return np.exp(shift) * np.linalg.solve(eye - w0 / 2 + w2, eye + w0 / 2 + w2)
 
 
-def _tangent_growth(model, theta0, p0, *, dt, every, blocks, method, t0, basis, progress,
-                    label):
-    """Carry the tangent vectors ``basis`` (shape ``(K, 2n, k)``) along one run.
+def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every, t0, progress,
+                    directions, label):
+    """Carry the tangent vectors ``directions`` (shape ``(2n, k)``) along one run.
 
-    Every ``every`` steps the propagated vectors are re-orthonormalised by a
-    QR factorisation, ``V = Q R``; ``log |R_ii|`` is the growth of the
-    ``i``-th direction not already spanned by the first ``i - 1``. Returns
-    the running sums divided by the elapsed time, shape ``(blocks, K, k)``,
-    and the run.
+    Every ``save_every`` steps the propagated vectors are re-orthonormalised
+    by a QR factorisation, ``V = Q R``; ``log |R_ii|`` is the growth of the
+    ``i``-th direction not already spanned by the first ``i - 1``.
+
+    Returns
+    -------
+    t : ndarray, shape (J,)
+    running : ndarray, shape (J, ..., k)
+        The sums of logarithms divided by the elapsed time.
+    method : str
+    dt, seconds : float
     """
+    start = time.perf_counter()
+    model, theta0, p0, batch, dt, every, blocks = _prepare(
+        model, theta0, omega0, p0, t_end, dt, "save_every", save_every
+    )
     n, members = model.n, len(theta0)
     total = blocks * every
     # Memory of a segment: the Jacobians and propagators of each of its steps.
     length = segment_length(total, 4 * members * (2 * n) ** 2, every)
     run = simulate_segments(model, theta0, p0=p0, t_end=total * dt, dt=dt, method=method,
-                            segment_steps=length, t0=t0, progress=progress, label=label)
-    log_sum = np.zeros(basis.shape[::2])
+                            segment_steps=length, t0=check.real_number("t0", t0),
+                            progress=progress, label=label)
+    basis = np.broadcast_to(directions, (members, *directions.shape)).copy()
+    log_sum = np.zeros((members, directions.shape[1]))
     running = np.empty((blocks, *log_sum.shape))
     recorded = 0
     for segment in run:
@@ -287,7 +299,9 @@ def _tangent_growth(model, theta0, p0, *, dt, every, blocks, method, t0, basis, 
             log_sum += np.log(np.abs(np.diagonal(r, axis1=-2, axis2=-1)))
             recorded += 1
             running[recorded - 1] = log_sum / (recorded * every * dt)
-    return running, run
+    t = (np.arange(blocks) + 1) * every * dt
+    return (t, running.reshape(blocks, *batch, directions.shape[1]), run.method.name, dt,
+            time.perf_counter() - start)
 
 
 def lyapunov_variational(
@@ -374,18 +388,13 @@ def lyapunov_variational(
     >>> bool(est.exponent > 0.5)
     True
     """
-    model, theta0, p0, batch, dt, every, blocks = _prepare(
-        model, theta0, omega0, p0, t_end, dt, "save_every", save_every
+    check.pendulum_model(model)
+    t, running, name, dt, seconds = _tangent_growth(
+        model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
+        t0=t0, progress=progress, directions=unit_direction(2 * model.n, seed)[:, None],
+        label="variational",
     )
-    start = time.perf_counter()
-    direction = unit_direction(2 * model.n, seed)
-    basis = np.broadcast_to(direction[:, None], (len(theta0), 2 * model.n, 1)).copy()
-    running, run = _tangent_growth(model, theta0, p0, dt=dt, every=every, blocks=blocks,
-                                   method=method, t0=check.real_number("t0", t0), basis=basis,
-                                   progress=progress, label="variational")
-    t = (np.arange(blocks) + 1) * every * dt
-    return LyapunovEstimate(t, running[..., 0].reshape(blocks, *batch), "variational",
-                            run.method.name, dt, time.perf_counter() - start)
+    return LyapunovEstimate(t, running[..., 0], "variational", name, dt, seconds)
 
 
 @dataclass(frozen=True)
@@ -501,15 +510,9 @@ def lyapunov_spectrum(
     >>> round(spectrum.sum, 12)  # -damping / (m l^2)
     -0.5
     """
-    model, theta0, p0, batch, dt, every, blocks = _prepare(
-        model, theta0, omega0, p0, t_end, dt, "save_every", save_every
+    check.pendulum_model(model)
+    t, running, name, dt, seconds = _tangent_growth(
+        model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
+        t0=t0, progress=progress, directions=np.eye(2 * model.n), label="spectrum",
     )
-    start = time.perf_counter()
-    dim = 2 * model.n
-    basis = np.broadcast_to(np.eye(dim), (len(theta0), dim, dim)).copy()
-    running, run = _tangent_growth(model, theta0, p0, dt=dt, every=every, blocks=blocks,
-                                   method=method, t0=check.real_number("t0", t0), basis=basis,
-                                   progress=progress, label="spectrum")
-    t = (np.arange(blocks) + 1) * every * dt
-    return LyapunovSpectrum(t, running.reshape(blocks, *batch, dim), run.method.name, dt,
-                            time.perf_counter() - start)
+    return LyapunovSpectrum(t, running, name, dt, seconds)
