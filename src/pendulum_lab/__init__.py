@@ -16,6 +16,7 @@ Quick start
 True
 """
 
+from .family import ModelFamily
 from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
@@ -48,6 +49,7 @@ __all__ = [
     "Chain",
     "ConvergenceError",
     "Method",
+    "ModelFamily",
     "PendulumModel",
     "SegmentedRun",
     "Trajectory",
