@@ -67,6 +67,24 @@ def test_a_family_in_segments_is_the_same_run():
     assert np.array_equal(whole.theta[:, 0], plain.theta)
 
 
+def test_a_segmented_family_keeps_each_members_parameters_when_members_leave():
+    family = DRIVEN.family(drive_amplitude=[0.9, 1.2, 1.5])
+    theta0 = np.full((3, 1), 0.3)
+    run = pl.simulate_segments(family, theta0, np.zeros_like(theta0), t_end=4.0, dt=0.02,
+                               method="rk4", segment_steps=50)
+    segments = iter(run)
+    next(segments)
+    run.keep(np.array([True, False, True]))  # the middle member leaves after one segment
+    last = list(segments)[-1]
+    assert run.members.tolist() == [0, 2] and run.model.shape == (2,)
+    for row, k in enumerate((0, 2)):
+        one = pl.simulate(family.member(k), [0.3], [0.0], t_end=4.0, dt=0.02, method="rk4")
+        assert np.allclose(last.theta[-1, row], one.theta[-1], rtol=0, atol=1e-13)
+    # negative control: the kept members are not the first two
+    wrong = pl.simulate(family.member(1), [0.3], [0.0], t_end=4.0, dt=0.02, method="rk4")
+    assert not np.allclose(last.theta[-1, 1], wrong.theta[-1], atol=1e-6)
+
+
 def test_family_functions_broadcast_like_their_members():
     family = pl.double_pendulum(damping=0.1).family(damping=[0.1, 0.4], g=[9.81, 3.0])
     rng = np.random.default_rng(2)
