@@ -79,6 +79,12 @@ class Config:
     limit_steps: int = 200
     variational_t_end: float = 20.0  # item 7
     variational_rounds: int = 7
+    bif_values: int = 600  # item 8: amplitudes of the bifurcation diagram
+    bif_periods: int = 300  # sampled drive periods
+    bif_transient: int = 300  # drive periods before the samples
+    bif_steps_per_period: int = 100
+    bif_rounds: int = 2
+    bif_c_members: int = 20  # members the C loop runs for its time per step
 
 
 FULL = Config("full")
@@ -101,6 +107,11 @@ QUICK = replace(
     flip_t_end=5.0,
     limit_members=400,
     variational_rounds=3,
+    bif_values=120,
+    bif_periods=60,
+    bif_transient=60,
+    bif_rounds=1,
+    bif_c_members=10,
 )
 SMOKE = replace(
     FULL,
@@ -129,6 +140,12 @@ SMOKE = replace(
     limit_steps=10,
     variational_t_end=0.2,
     variational_rounds=1,
+    bif_values=4,
+    bif_periods=2,
+    bif_transient=2,
+    bif_steps_per_period=10,
+    bif_rounds=1,
+    bif_c_members=2,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

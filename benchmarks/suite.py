@@ -1,6 +1,6 @@
-"""The benchmark suite of issue 7 (and item 7 of issue 12): each a ratio measured side by side.
+"""The benchmark suite (issue 7; items 7 and 8 from issues 12 and 13), each a ratio side by side.
 
-One file per item (``item_slider.py`` ... ``item_c_limit.py``) and a shared
+One file per item (``item_slider.py`` ... ``item_bifurcation.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
 machine's description). This module lists the items and runs them;
 ``benchmarks/run.py`` is the command-line front end; see
@@ -30,6 +30,7 @@ from harness import (
     machine_description,
     verdict,
 )
+from item_bifurcation import bench_bifurcation
 from item_c_limit import bench_c_limit
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
@@ -65,6 +66,7 @@ ITEMS = {
     "ensemble": (5, bench_ensemble, True),
     "c_limit": (6, bench_c_limit, True),
     "variational": (7, bench_variational, False),
+    "bifurcation": (8, bench_bifurcation, False),
 }
 
 

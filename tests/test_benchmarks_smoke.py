@@ -55,7 +55,8 @@ def well_formed(suite, section, number):
 
 
 @pytest.mark.parametrize(
-    "key", ["slider", "first_use", "long_run", "report_glrk4", "ensemble", "c_limit", "variational"]
+    "key", ["slider", "first_use", "long_run", "report_glrk4", "ensemble", "c_limit", "variational",
+            "bifurcation"]
 )
 def test_each_item_runs_and_returns_rows(suite, key):
     if suite.ITEMS[key][2] and shutil.which(suite.c_yardstick.COMPILER) is None:
@@ -93,6 +94,25 @@ def test_c_loop_does_the_same_arithmetic_as_simulate(suite, tmp_path):
     # Negative control: one step fewer is a different end state.
     q_short = loop.single(theta0, dp.momenta(theta0, omega0), 299, 0.01).theta
     assert np.max(np.abs(q_short - traj.theta[-1])) > 1e-6
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler")
+def test_c_loop_of_the_driven_pendulum_does_the_same_arithmetic(suite, tmp_path):
+    import numpy as np
+
+    import pendulum_lab as pl
+
+    model = pl.driven_pendulum()  # forced: the drive depends on the time of each stage
+    loop = suite.c_yardstick.build(model, tmp_path)
+    theta0 = np.array([[0.2], [1.0]])
+    p0 = model.momenta(theta0, np.zeros_like(theta0))
+    run = loop.ensemble(theta0, p0, 500, 0.05)
+    traj = pl.simulate(model, theta0, p0=p0, t_end=25.0, dt=0.05, method="rk4", keep="final")
+    assert np.max(np.abs(run.theta - traj.theta[-1])) <= 1e-9
+    assert np.max(np.abs(run.p - traj.p[-1])) <= 1e-9
+    # Negative control: the conservative pendulum's C loop is a different motion.
+    free = suite.c_yardstick.build(pl.simple_pendulum(g=1.0), tmp_path)
+    assert np.max(np.abs(free.ensemble(theta0, p0, 500, 0.05).theta - traj.theta[-1])) > 1e-3
 
 
 def test_search_finds_the_largest_passing_value(long_run):

@@ -16,6 +16,7 @@ Quick start
 True
 """
 
+from .family import ModelFamily
 from .integrators import (
     CONFORMAL_METHODS,
     METHODS,
@@ -59,6 +60,7 @@ __all__ = [
     "Chain",
     "ConvergenceError",
     "Method",
+    "ModelFamily",
     "PendulumModel",
     "SegmentedRun",
     "Trajectory",

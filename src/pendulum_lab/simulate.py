@@ -133,10 +133,21 @@ def _field(n: int, forced: bool, params: tuple, separable: bool,
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
-    """The model's compiled vector field (Hamiltonian, plus its forces), as integrators see it."""
+    """The model's compiled vector field (Hamiltonian, plus its forces), as integrators see it.
+
+    For a :class:`~pendulum_lab.family.ModelFamily` the parameters come as one
+    row per member (its shape flattened), and so do the damping rates.
+    """
     rate = model.conformal_damping_rate
-    return _field(model.n, model.forced, tuple(model.parameter_values.values()), model.separable,
-                  np.nan if rate is None else rate)
+    if not model.shape:
+        return _field(model.n, model.forced, tuple(model.parameter_values.values()),
+                      model.separable, np.nan if rate is None else rate)
+    kernels = codegen.load_kernels(model.n, model.forced)
+    rows = np.stack(np.broadcast_arrays(*model.parameter_values.values()), axis=-1)
+    rates = np.broadcast_to(np.nan if rate is None else rate, model.shape)
+    return HamiltonianField(kernels.hamilton, kernels.acceleration,
+                            np.ascontiguousarray(rows.reshape(-1, rows.shape[-1])),
+                            model.separable, np.array(rates, dtype=float).reshape(-1))
 
 
 def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianField):
@@ -335,16 +346,17 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     if dt == 0:
         raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
     t0 = check.real_number("t0", t0)
-    field = hamiltonian_field(model)
-    _check_method_fits(model, method, field)
     shape = theta0.shape
+    row_models = model.for_ensemble(shape[:-1])
+    field = hamiltonian_field(row_models)
+    _check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
     y = start.reshape(-1, model.n)
-    y = to_method_variables(model, method, q, y, given_momenta=p0 is not None)
+    y = to_method_variables(row_models, method, q, y, given_momenta=p0 is not None)
     _step_rows(method, field, q, y, dt, f"dt = {dt:g}", t0=t0)
     if method.variables == "velocity":
-        y = model.momenta(q, y)
+        y = row_models.momenta(q, y)
     return q.reshape(shape), y.reshape(shape)
 
 
@@ -570,6 +582,9 @@ def simulate(
     Parameters
     ----------
     model : PendulumModel
+        Or a :class:`~pendulum_lab.family.ModelFamily` (``model.family(...)``)
+        whose shape broadcasts to the ensemble shape ``...``: each member then
+        runs with its own parameters.
     theta0, omega0 : array_like, shape (n,) or (..., n)
         Initial angles [rad] and angular velocities [rad/s]. Leading axes
         make an ensemble, integrated together.
@@ -637,14 +652,16 @@ def simulate(
             raise ValueError("give `save_every` only with keep='all' (keep='final' keeps the "
                              "initial and the final state)")
         save_every = n_steps
-    field = hamiltonian_field(model)
+    batch_shape = theta0.shape[:-1]
+    # One model per row of the run (a family's members get their own parameters).
+    row_models = model.for_ensemble(batch_shape)
+    field = hamiltonian_field(row_models)
     _check_method_fits(model, method, field)
 
     n_saved = n_steps // save_every + 1
-    batch_shape = theta0.shape[:-1]
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    y = to_method_variables(model, method, q, start.reshape(-1, model.n),
+    y = to_method_variables(row_models, method, q, start.reshape(-1, model.n),
                              given_momenta=p0 is not None)
     members = q.shape[0]
     _check_memory(n_saved, members, model.n, t_end, dt, n_steps, save_every)

@@ -14,7 +14,9 @@ prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
   problem, one initial state by several methods;
 * :mod:`.iteration`: how fast an implicit step's stage iteration contracts;
 * :mod:`.oscillations`: exact and measured periods, spectra;
-* :mod:`.linearization`: equilibria, normal modes, the linearised motion.
+* :mod:`.linearization`: equilibria, normal modes, the linearised motion;
+* :mod:`.damping`: area contraction and the decay of energy under damping,
+  by method and step.
 
 Modified Hamiltonians (backward error analysis) live in
 :mod:`pendulum_lab.geometric`.
@@ -46,6 +48,7 @@ from .comparison import (
     scipy_run,
     work_precision,
 )
+from .damping import EnergyDecay, LinearDecay, energy_decay, linear_decay
 from .iteration import StageIteration, stage_contraction
 from .linearization import (
     equilibrium_angles,
@@ -73,6 +76,8 @@ __all__ = [
     "AdaptiveRun",
     "ComparisonRow",
     "EnergyComparison",
+    "EnergyDecay",
+    "LinearDecay",
     "MethodComparison",
     "OrderResult",
     "StageIteration",
@@ -83,12 +88,14 @@ __all__ = [
     "compare_trajectory",
     "dominant_frequencies",
     "dop853_work_precision",
+    "energy_decay",
     "energy_growth",
     "equilibrium_angles",
     "exact_period",
     "find_equilibrium",
     "finite_difference_jacobian",
     "global_error",
+    "linear_decay",
     "linearized_solution",
     "normal_mode_frequencies",
     "normal_modes",

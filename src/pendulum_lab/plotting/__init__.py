@@ -11,12 +11,14 @@ and a test can inspect the artists under any backend. By topic:
   explorers' :data:`PANELS`;
 * :mod:`.methods`: observed order, energy error growth, work-precision,
   amplification of small swings (linear stability), the contraction of an
-  implicit method's stage iteration;
+  implicit method's stage iteration, the decay of energy under damping;
 * :mod:`.chaos`: separation, Lyapunov exponents, Poincare sections, the
   flip-time map, the small-angle comparison;
 * :mod:`.geometric`: geometric integration (notebooks 13-16): carried loops
   and their areas, level sets of modified Hamiltonians, energy drift and error
-  growth, the standard map, adaptive steps.
+  growth, the standard map, adaptive steps;
+* :mod:`.driven`: stroboscopic sections, bifurcation diagrams, basins of
+  attraction of the driven pendulum.
 """
 
 from .chaos import (
@@ -24,12 +26,14 @@ from .chaos import (
     plot_landing_errors,
     plot_lyapunov,
     plot_lyapunov_energy,
+    plot_lyapunov_spectrum,
     plot_parting,
     plot_section,
     plot_sections,
     plot_separation,
     plot_small_angle,
 )
+from .driven import plot_basins, plot_bifurcation, plot_stroboscopic
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -63,6 +67,7 @@ from .geometric import (
 from .methods import (
     plot_amplification,
     plot_energy_comparison,
+    plot_energy_decay,
     plot_energy_error_growth,
     plot_order,
     plot_stage_contraction,
@@ -105,9 +110,12 @@ __all__ = [
     "plot_amplification",
     "plot_angles",
     "plot_area_ratio",
+    "plot_basins",
+    "plot_bifurcation",
     "plot_carried_loops",
     "plot_energy",
     "plot_energy_comparison",
+    "plot_energy_decay",
     "plot_energy_drift",
     "plot_energy_error",
     "plot_energy_error_growth",
@@ -119,6 +127,7 @@ __all__ = [
     "plot_link_projections",
     "plot_lyapunov",
     "plot_lyapunov_energy",
+    "plot_lyapunov_spectrum",
     "plot_modified_energy_orders",
     "plot_modified_level_sets",
     "plot_normal_modes",
@@ -137,6 +146,7 @@ __all__ = [
     "plot_stage_contraction",
     "plot_standard_map",
     "plot_step_sizes",
+    "plot_stroboscopic",
     "plot_transport_threshold",
     "plot_work_precision",
     "subscript",

@@ -23,6 +23,7 @@ __all__ = [
     "plot_landing_errors",
     "plot_lyapunov",
     "plot_lyapunov_energy",
+    "plot_lyapunov_spectrum",
     "plot_parting",
     "plot_section",
     "plot_sections",
@@ -228,4 +229,25 @@ def plot_parting(comparison, amplitudes, ax: Axes | None = None) -> Figure:
         )
     ax.set(xlabel="release amplitude (rad)", ylabel="parting time (s)")
     ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_lyapunov_spectrum(spectrum, ax: Axes | None = None, member=(), **kwargs) -> Figure:
+    """Running estimates of every exponent of a :class:`~pendulum_lab.chaos.LyapunovSpectrum`.
+
+    ``member`` picks one member of an ensemble; the dotted line is the sum
+    of the exponents (the mean contraction rate of phase-space volume).
+    """
+    ax = get_axes(ax)
+    member = (member,) if np.ndim(member) == 0 and member != () else tuple(member)
+    running = spectrum.running[(slice(None), *member)]
+    if running.ndim != 2:
+        raise ValueError(f"`member` must pick one member of the ensemble shape "
+                         f"{spectrum.running.shape[1:-1]}, got {member}")
+    for i in range(running.shape[-1]):
+        ax.semilogx(spectrum.t, running[:, i], label=f"lambda{subscript(i + 1)}", **kwargs)
+    ax.semilogx(spectrum.t, running.sum(axis=-1), ":", color="k", label="sum")
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set(xlabel="t (s)", ylabel="running estimate (1/s)")
+    ax.legend(fontsize="small", ncol=2)
     return ax.figure

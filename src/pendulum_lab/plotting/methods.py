@@ -1,6 +1,7 @@
 """Figures that compare integrators: observed order, energy error growth, work-precision.
 
-Also the contraction of an implicit method's stage iteration against the step.
+Also the contraction of an implicit method's stage iteration against the step and the
+decay of energy under damping.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from .figures import axis_label, get_axes
 __all__ = [
     "plot_amplification",
     "plot_energy_comparison",
+    "plot_energy_decay",
     "plot_energy_error_growth",
     "plot_order",
     "plot_stage_contraction",
@@ -231,5 +233,34 @@ def plot_stage_contraction(iterations, ax: Axes | None = None, label: str = "") 
     ax.loglog(dts, predicted, "-", color=dots.get_color(), lw=1.0,
               label=f"h rho(A) rho(df/dy){', ' + label if label else ''}")
     ax.set(xlabel="step h (s)", ylabel="contraction per sweep")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_energy_decay(decay, dt: float | None = None, ax: Axes | None = None) -> Figure:
+    """Energy at the turning points over the reference's at the same times, from an ``EnergyDecay``.
+
+    One line per method at step ``dt`` (the largest of ``decay.dt`` by
+    default): the energy above rest at each highest point of the swing,
+    divided by the reference's at that time (interpolated in its logarithm
+    between the reference's own highest points). A method whose swings
+    decay too slowly climbs above 1, too fast falls below; a wrong period
+    alone moves the points sideways, not off 1.
+    """
+    from ..analysis.damping import turning_points
+
+    ax = get_axes(ax, width=7.0, height=3.6)
+    index = int(np.argmax(decay.dt)) if dt is None else int(np.argmin(np.abs(decay.dt - dt)))
+    ref_times, ref_energies = turning_points(decay.model, decay.reference)
+    for name in decay.methods:
+        traj = decay.trajectories[name][index]
+        times, energies = turning_points(decay.model, traj)
+        inside = (times >= ref_times[0]) & (times <= ref_times[-1])
+        envelope = np.exp(np.interp(times[inside], ref_times, np.log(ref_energies)))
+        ax.plot(times[inside], energies[inside] / envelope, "o-", ms=3, lw=1.2,
+                label=f"{name}, dt = {traj.dt:g} s")
+    ax.axhline(1.0, color="k", lw=0.8, ls="--",
+               label=f"reference ({decay.reference.method.name}, dt = {decay.reference.dt:g} s)")
+    ax.set(xlabel="time of the turning point (s)", ylabel="energy above rest / reference's")
     ax.legend(fontsize="small")
     return ax.figure
