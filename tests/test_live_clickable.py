@@ -168,3 +168,27 @@ def test_explicit_euler_orbits_spiral_out(portrait):
 def test_portrait_explorer_refuses_other_models():
     with pytest.raises(ValueError, match="simple pendulum"):
         portrait_explorer(DP)
+
+
+def test_the_explorers_portrait_panel_holds_a_fast_trajectory():
+    """Notebook 04's explorer from theta = -pi, omega = -10 rad/s with explicit Euler: the
+    energy grows, the rotation speeds up beyond the default window (+-10.02 rad/s)."""
+    from pendulum_lab import widgets
+
+    ex = widgets.explore(
+        SP, method="explicit_euler", t_end=20.0, dt=0.01, theta0=[1.0], plots=("portrait",)
+    )
+    ex.controls["theta"].value = -np.pi
+    ex.controls["omega"].value = -10.0
+    (ax,) = ex.figure.axes
+    fastest = np.max(np.abs(ex.trajectory.omega))
+    assert fastest > 12.0  # faster than the default window allows
+    low, high = ax.get_ylim()
+    assert low <= -fastest and high >= fastest
+    x, y = ax.lines[-2].get_data()  # the trajectory (the start marker is last)
+    inside = np.isnan(x) | ((x > -np.pi) & (x <= np.pi) & (y >= low) & (y <= high))
+    assert np.all(inside)
+    # Negative control: a slow libration keeps the default window.
+    ex.controls["omega"].value = 0.0
+    ex.controls["theta"].value = 0.5
+    assert ax.get_ylim()[1] == pytest.approx(1.6 * 2 * np.sqrt(9.81))

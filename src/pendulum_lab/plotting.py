@@ -232,7 +232,8 @@ def plot_phase_portrait(
     rotations (``E > m g l``) green, and the separatrix ``E = m g l`` through
     the upright saddle red. The center at ``(0, 0)`` and the saddles at
     ``(+-pi, 0)`` are marked. A ``trajectory`` is drawn on top (thick, with its
-    start marked).
+    start marked), its angles wrapped into ``(-pi, pi]``; the window grows
+    to hold all of it.
 
     Parameters
     ----------
@@ -240,7 +241,8 @@ def plot_phase_portrait(
         A simple pendulum.
     omega_max : float, optional
         Half-height of the window [rad/s]; default 1.6 times the separatrix's
-        top speed ``2 sqrt(g / l)``.
+        top speed ``2 sqrt(g / l)``. If the ``trajectory`` is faster
+        somewhere, the window widens to 1.08 times its largest ``|omega|``.
     libration_levels, rotation_levels : int
         How many level sets of each kind to draw.
     """
@@ -253,6 +255,11 @@ def plot_phase_portrait(
     mass, length, g = model.masses[0], model.lengths[0], model.g
     top_speed = 2.0 * np.sqrt(abs(g) / length)
     omega_max = 1.6 * top_speed if omega_max is None else float(omega_max)
+    if trajectory is not None:
+        speeds = np.abs(_single(trajectory).omega[:, 0])
+        speeds = speeds[np.isfinite(speeds)]
+        if speeds.size and speeds.max() > omega_max:
+            omega_max = 1.08 * float(speeds.max())
     theta = np.linspace(-np.pi, np.pi, 401)
     omega = np.linspace(-omega_max, omega_max, 401)
     big_theta, big_omega = np.meshgrid(theta, omega)
