@@ -21,7 +21,9 @@ Where no kernel is attached (a notebook viewed as a static page), widgets
 cannot run; :func:`html_animation` renders the same drawing as a
 self-contained JavaScript/HTML animation (matplotlib's HTML player, the one
 behind :meth:`matplotlib.animation.Animation.to_jshtml`) whose frames are
-embedded in the output.
+embedded in the output. For slides, :func:`save_animation` (and
+:meth:`Simulator.save`) writes it as an animated GIF (Pillow) or an MP4 (the
+ffmpeg binary that the ``imageio-ffmpeg`` package ships).
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from pathlib import Path
 
 import ipywidgets as widgets
 import numpy as np
-from matplotlib.animation import HTMLWriter
+from matplotlib.animation import FFMpegWriter, HTMLWriter, PillowWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
@@ -61,6 +63,7 @@ __all__ = [
     "count_frames",
     "frame_indices",
     "html_animation",
+    "save_animation",
     "simulator",
 ]
 
@@ -410,6 +413,16 @@ class Simulator(Instrument):
         kwargs.setdefault("speed", self.speed.value)
         return html_animation(self.trajectory, self.model, **kwargs)
 
+    def save(self, path, fps: float = FPS, seconds: float | None = None, **kwargs) -> Path:
+        """Write the current run, at the current speed, as ``.gif`` or ``.mp4``.
+
+        See :func:`save_animation` for the arguments; returns the path written.
+        """
+        kwargs.setdefault("speed", self.speed.value)
+        kwargs.setdefault("trail", self.trail)
+        return save_animation(self.trajectory, self.model, path, fps=fps, seconds=seconds,
+                              **kwargs)
+
 
 def simulator(
     model: PendulumModel,
@@ -475,18 +488,19 @@ def simulator(
 MAX_FRAMES = 300
 
 
-class _BlittingHTMLWriter(HTMLWriter):
-    """matplotlib's HTML player, fed with frames blitted by a scene.
+class _Blitting:
+    """A movie writer whose frames are blitted by a scene (mixed into matplotlib's writers).
 
-    The stock writer saves the whole figure for every frame; redrawing only
+    The stock writers save the whole figure for every frame; redrawing only
     the moving artists over a cached background is several times faster.
     """
 
     def __init__(self, scene: PendulumScene, **kwargs):
-        super().__init__(embed_frames=True, **kwargs)
+        super().__init__(**kwargs)
         self._scene, self._background = scene, None
 
-    def grab_frame(self, **savefig_kwargs):
+    def _blit(self) -> memoryview:
+        """Draw the scene's current state; return the canvas's RGBA pixels."""
         canvas = self.fig.canvas
         if self._background is None:  # after setup(), which may adjust the size
             canvas.draw()
@@ -494,8 +508,35 @@ class _BlittingHTMLWriter(HTMLWriter):
         canvas.restore_region(self._background)
         for artist in self._scene.artists:
             self.fig.draw_artist(artist)
-        frame = base64.encodebytes(_encode(canvas, self.frame_format)).decode("ascii")
+        return canvas.buffer_rgba()
+
+
+class _BlittingHTMLWriter(_Blitting, HTMLWriter):
+    """matplotlib's HTML player, each frame an embedded image."""
+
+    def __init__(self, scene: PendulumScene, **kwargs):
+        super().__init__(scene, embed_frames=True, **kwargs)
+
+    def grab_frame(self, **savefig_kwargs):
+        self._blit()
+        frame = base64.encodebytes(_encode(self.fig.canvas, self.frame_format)).decode("ascii")
         self._saved_frames.append(frame)
+
+
+class _BlittingGIFWriter(_Blitting, PillowWriter):
+    """matplotlib's Pillow writer (animated GIF)."""
+
+    def grab_frame(self, **savefig_kwargs):
+        rgba = self._blit()
+        image = Image.frombuffer("RGBA", self.frame_size, rgba, "raw", "RGBA", 0, 1)
+        self._frames.append(image.convert("RGB"))
+
+
+class _BlittingMP4Writer(_Blitting, FFMpegWriter):
+    """matplotlib's ffmpeg pipe writer (raw RGBA frames in, H.264 out)."""
+
+    def grab_frame(self, **savefig_kwargs):
+        self._proc.stdin.write(self._blit())
 
 
 def html_animation(
@@ -579,3 +620,104 @@ def html_animation(
 def count_frames(html: str) -> int:
     """The number of embedded frames in the output of :func:`html_animation`."""
     return len(re.findall(r"frames\[\d+\] = \"data:image/", html))
+
+
+def _ffmpeg() -> str:
+    """The ffmpeg binary shipped in the ``imageio-ffmpeg`` wheel, or a clear ImportError."""
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise ImportError(
+            "saving an MP4 needs ffmpeg, which the imageio-ffmpeg package ships: "
+            "pip install imageio-ffmpeg (or pendulum_lab[export]); a .gif needs nothing more"
+        ) from None
+    return imageio_ffmpeg.get_ffmpeg_exe()
+
+
+def save_animation(
+    traj: Trajectory,
+    model: PendulumModel,
+    path,
+    *,
+    fps: float = FPS,
+    seconds: float | None = None,
+    speed: float = 1.0,
+    trail: float = TRAIL,
+    dpi: float = 80,
+) -> Path:
+    """Write a run as an animated GIF or an MP4 video, for slides.
+
+    The frames show the drawing of the live :func:`simulator` (chain, trail,
+    energies, with the time and energies written above), one per
+    :func:`frame_indices`. The file type follows the suffix: ``.gif`` through
+    Pillow (matplotlib's ``PillowWriter``), ``.mp4`` (H.264) through
+    matplotlib's ``FFMpegWriter`` with the ffmpeg of ``imageio-ffmpeg``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A single trajectory of ``model``.
+    model : PendulumModel
+    path : str or Path
+        Ends in ``.gif`` or ``.mp4``.
+    fps : float
+        Frames per second of the file, ``> 0``.
+    seconds : float, optional
+        Length of the animation [s of playing time], ``> 0``; by default the
+        whole run. Never more frames than the run has.
+    speed : float
+        Simulated seconds per second of animation.
+    trail : float
+        Trail length [s].
+    dpi : float
+        Resolution; the figure is 9 x 3.6 inches.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ImportError
+        For ``.mp4`` without ``imageio-ffmpeg``, saying how to install it.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from PIL import Image
+    >>> import pendulum_lab as pl
+    >>> sp_ = pl.simple_pendulum()
+    >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     gif = save_animation(traj, sp_, pathlib.Path(folder, "swing.gif"), fps=5, dpi=40)
+    ...     Image.open(gif).n_frames
+    6
+    """
+    from matplotlib import rc_context
+
+    if not isinstance(traj, Trajectory):
+        raise TypeError(f"`traj` must be a Trajectory, got {type(traj).__name__}")
+    check_model(model)
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"`path` must end in .gif or .mp4, got {path.name!r}")
+    frames = frame_indices(traj, fps, speed)
+    if seconds is not None:
+        if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds > 0):
+            raise ValueError(f"`seconds` must be a positive number, got {seconds!r}")
+        frames = frames[: max(1, round(seconds * fps))]
+    settings = {} if suffix == ".gif" else {"animation.ffmpeg_path": _ffmpeg()}
+    figure = Figure(figsize=(9, 3.6), dpi=dpi)
+    FigureCanvasAgg(figure)
+    scene = PendulumScene(figure, model, traj, trail, animated=True)
+    if suffix == ".gif":
+        writer = _BlittingGIFWriter(scene, fps=fps)
+    else:
+        writer = _BlittingMP4Writer(scene, fps=fps, codec="h264")
+    with rc_context(settings), writer.saving(figure, str(path), dpi):
+        for index in frames:
+            scene.show(index)
+            writer.grab_frame()
+    return path
