@@ -497,6 +497,7 @@ function render({ model, el }) {
       }
       root.dataset.run = String(run ? run.id : -1);
       root.dataset.states = String(run ? run.available : 0);
+      root.dataset.chunks = String(run ? run.got.size : 0);
       dirty = true;
     } else if (content.type === "released") {
       pending = false;
