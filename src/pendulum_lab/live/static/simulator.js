@@ -137,6 +137,7 @@ function render({ model, el }) {
   let dragging = null; // {bob, angles, pointerId}
   let pending = false; // a release sent, no answer yet
   let frameId = 0;
+  let drawSeconds = 0; // time spent drawing, for data-draw-ms (the cost of one frame)
 
   function setStatus(text, kind) {
     status.textContent = text || "";
@@ -463,10 +464,13 @@ function render({ model, el }) {
       dirty = true;
     }
     if (dirty) {
+      const started = performance.now();
       draw();
+      drawSeconds += (performance.now() - started) / 1000;
       dirty = false;
       frames += 1;
       root.dataset.frames = String(frames);
+      root.dataset.drawMs = ((1000 * drawSeconds) / frames).toFixed(3);
       root.dataset.clock = stamp.toFixed(3);
       if (run) {
         scrub.value = String(Math.round(t / run.meta.spacing));
