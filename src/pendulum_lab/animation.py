@@ -302,17 +302,7 @@ class Simulator(Instrument):
         speed: float,
         trail: float,
     ):
-        n, keys = model.n, _keys(model.n)
-        controls = {
-            **_state_controls(n, theta0, omega0),
-            **_parameter_controls(model),
-            **_run_controls(method, t_end, dt, t_end_range=(1.0, 60.0)),
-        }
-        columns = [
-            ("Initial state", keys["theta"] + keys["omega"]),
-            ("Parameters", keys["mass"] + keys["length"] + ["g"]),
-            ("Integration", ["method", "dt", "t_end"]),
-        ]
+        controls, columns = _simulator_controls(model, method, t_end, dt, theta0, omega0)
         super().__init__(model, controls, columns, rows=1.3)
         self.trail = trail
         self.scene: PendulumScene | None = None
@@ -470,6 +460,44 @@ def simulator(
     >>> sim.time
     1.0
     """
+    model, theta0, omega0 = _simulator_arguments(model, theta0, omega0, t_end, speed, trail)
+    sim = Simulator(model, method, t_end, dt, theta0, omega0, speed, trail)
+    if not sim.update():
+        raise ValueError(sim.message)
+    return sim
+
+
+def _simulator_controls(model: PendulumModel, method, t_end, dt, theta0, omega0):
+    """A simulator's controls and their columns: the explorer's, with ``t_end`` in [1, 60] s.
+
+    Shared by this simulator and the browser-drawn one of :mod:`pendulum_lab.live`.
+
+    Returns
+    -------
+    controls : dict of str -> ipywidgets widget
+    columns : list of (title, list of control names)
+    """
+    n, keys = model.n, _keys(model.n)
+    controls = {
+        **_state_controls(n, theta0, omega0),
+        **_parameter_controls(model),
+        **_run_controls(method, t_end, dt, t_end_range=(1.0, 60.0)),
+    }
+    columns = [
+        ("Initial state", keys["theta"] + keys["omega"]),
+        ("Parameters", keys["mass"] + keys["length"] + ["g"]),
+        ("Integration", ["method", "dt", "t_end"]),
+    ]
+    return controls, columns
+
+
+def _simulator_arguments(model, theta0, omega0, t_end, speed, trail):
+    """A simulator's arguments checked: ``(model, theta0, omega0)`` with the defaults filled in.
+
+    Raises ``ValueError`` for a ``speed`` not in :data:`SPEEDS`, a negative
+    ``trail`` or a ``t_end`` outside [1, 60] s, and as
+    :func:`pendulum_lab.widgets.start_state` for the initial state.
+    """
     model = check_model(model)
     theta0, omega0 = start_state(model.n, theta0, omega0)
     if speed not in SPEEDS:
@@ -478,10 +506,7 @@ def simulator(
         raise ValueError(f"`trail` must be a number of seconds >= 0, got {trail!r}")
     if not (isinstance(t_end, (int, float)) and 1.0 <= t_end <= 60.0):
         raise ValueError(f"`t_end` must be in [1, 60] s, got {t_end!r}")
-    sim = Simulator(model, method, t_end, dt, theta0, omega0, speed, trail)
-    if not sim.update():
-        raise ValueError(sim.message)
-    return sim
+    return model, theta0, omega0
 
 
 #: Default cap on the frames of :func:`html_animation` (each is an embedded PNG).

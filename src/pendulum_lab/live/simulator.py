@@ -33,19 +33,11 @@ import numpy as np
 import traitlets
 
 from pendulum_lab import _validation as check
-from pendulum_lab.animation import SPEEDS, TRAIL
+from pendulum_lab.animation import SPEEDS, TRAIL, _simulator_arguments, _simulator_controls
 from pendulum_lab.model import PendulumModel, check_model
 from pendulum_lab.plotting import wrap_angle
 from pendulum_lab.simulate import Trajectory
-from pendulum_lab.widgets import (
-    Instrument,
-    _keys,
-    _parameter_controls,
-    _run_controls,
-    _state_controls,
-    simulate_controls,
-    start_state,
-)
+from pendulum_lab.widgets import Instrument, _keys, simulate_controls
 
 from .channel import STATIC, ReplayWidget, float32_buffer
 
@@ -286,17 +278,7 @@ class LiveSimulator(Instrument):
     """
 
     def __init__(self, model, method, t_end, dt, theta0, omega0, speed, trail):
-        n, keys = model.n, _keys(model.n)
-        controls = {
-            **_state_controls(n, theta0, omega0),
-            **_parameter_controls(model),
-            **_run_controls(method, t_end, dt, t_end_range=(1.0, 60.0)),
-        }
-        columns = [
-            ("Initial state", keys["theta"] + keys["omega"]),
-            ("Parameters", keys["mass"] + keys["length"] + ["g"]),
-            ("Integration", ["method", "dt", "t_end"]),
-        ]
+        controls, columns = _simulator_controls(model, method, t_end, dt, theta0, omega0)
         self.view = PendulumView(speed=speed, trail=trail)
         self._holding = False
         super().__init__(model, controls, columns)
@@ -392,21 +374,12 @@ def live_simulator(
 
     Parameters
     ----------
-    model : PendulumModel
-        A simple, double or longer pendulum; its parameters are the sliders'
-        start values.
-    method : str
-        A key of :data:`pendulum_lab.METHODS`.
-    t_end, dt : float
-        Length of the run and step [s]; ``t_end`` in ``[1, 60]``.
-    theta0, omega0 : array_like, shape (n,), optional
-        Initial angles [rad] in ``[-pi, pi]`` and angular velocities [rad/s]
-        in ``[-10, 10]``; by default 1 rad for one link, ``(2.0, 2.5)`` for
-        two, at rest.
-    speed : float
-        Playback speed, one of :data:`pendulum_lab.animation.SPEEDS`.
-    trail : float
-        Length of the last bob's trail [s], ``>= 0``.
+    model, method, t_end, dt, theta0, omega0, speed, trail
+        As for :func:`pendulum_lab.animation.simulator`, the matplotlib
+        simulator (kept for the report and for export): the model, the
+        method, the run's length (``t_end`` in [1, 60] s) and step, the start
+        (default 1 rad for one link, ``(2.0, 2.5)`` for two, at rest), the
+        playback speed and the trail's length [s].
 
     Returns
     -------
@@ -424,14 +397,7 @@ def live_simulator(
     >>> sim.trajectory.theta[0].round(4).tolist(), sim.trajectory.omega[0].tolist()
     ([1.5708, 2.5], [0.0, 0.0])
     """
-    model = check_model(model)
-    theta0, omega0 = start_state(model.n, theta0, omega0)
-    if speed not in SPEEDS:
-        raise ValueError(f"`speed` must be one of {SPEEDS}, got {speed!r}")
-    if not (isinstance(trail, (int, float)) and trail >= 0):
-        raise ValueError(f"`trail` must be a number of seconds >= 0, got {trail!r}")
-    if not (isinstance(t_end, (int, float)) and 1.0 <= t_end <= 60.0):
-        raise ValueError(f"`t_end` must be in [1, 60] s, got {t_end!r}")
+    model, theta0, omega0 = _simulator_arguments(model, theta0, omega0, t_end, speed, trail)
     sim = LiveSimulator(model, method, t_end, dt, theta0, omega0, speed, trail)
     if not sim.update():
         raise ValueError(sim.message)

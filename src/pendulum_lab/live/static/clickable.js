@@ -228,23 +228,21 @@ function render({ model, el }) {
       draw();
     }
   }
-  model.on("msg:custom", onMessage);
-  model.on("change:background", showBackground);
-  model.on("change:frame", showBackground);
-  model.on("change:orbits", draw);
-  model.on("change:message", showMessage);
-  model.on("change:message_kind", showMessage);
+  const listeners = {
+    "msg:custom": onMessage,
+    "change:background": showBackground,
+    "change:frame": showBackground,
+    "change:orbits": draw,
+    "change:message": showMessage,
+    "change:message_kind": showMessage,
+  };
+  for (const [name, listener] of Object.entries(listeners)) model.on(name, listener);
   showBackground();
   showMessage();
 
   return () => {
     if (imageUrl) URL.revokeObjectURL(imageUrl);
-    model.off("msg:custom", onMessage);
-    model.off("change:background", showBackground);
-    model.off("change:frame", showBackground);
-    model.off("change:orbits", draw);
-    model.off("change:message", showMessage);
-    model.off("change:message_kind", showMessage);
+    for (const [name, listener] of Object.entries(listeners)) model.off(name, listener);
   };
 }
 

@@ -511,8 +511,6 @@ function render({ model, el }) {
       dirty = true;
     }
   }
-  model.on("msg:custom", onMessage);
-
   const onPlaying = () => setPlaying(model.get("playing"), false);
   const onSpeed = () => {
     speed = model.get("speed");
@@ -526,13 +524,17 @@ function render({ model, el }) {
   const onDirty = () => {
     dirty = true;
   };
-  model.on("change:playing", onPlaying);
-  model.on("change:speed", onSpeed);
-  model.on("change:speeds", fillSpeeds);
-  model.on("change:time", onTime);
-  model.on("change:trail", onDirty);
-  model.on("change:message", showModelMessage);
-  model.on("change:message_kind", showModelMessage);
+  const listeners = {
+    "msg:custom": onMessage,
+    "change:playing": onPlaying,
+    "change:speed": onSpeed,
+    "change:speeds": fillSpeeds,
+    "change:time": onTime,
+    "change:trail": onDirty,
+    "change:message": showModelMessage,
+    "change:message_kind": showModelMessage,
+  };
+  for (const [name, listener] of Object.entries(listeners)) model.on(name, listener);
 
   // ---- controls --------------------------------------------------------------------------
   play.addEventListener("click", () => setPlaying(!playing));
@@ -645,14 +647,7 @@ function render({ model, el }) {
   model.send({ type: "ready" });
   return () => {
     cancelAnimationFrame(frameId);
-    model.off("msg:custom", onMessage);
-    model.off("change:playing", onPlaying);
-    model.off("change:speed", onSpeed);
-    model.off("change:speeds", fillSpeeds);
-    model.off("change:time", onTime);
-    model.off("change:trail", onDirty);
-    model.off("change:message", showModelMessage);
-    model.off("change:message_kind", showModelMessage);
+    for (const [name, listener] of Object.entries(listeners)) model.off(name, listener);
   };
 }
 
