@@ -121,7 +121,7 @@ function render({ model, el }) {
     canvas.width = Math.round(WIDTH * scale);
     canvas.height = Math.round(HEIGHT * scale);
     canvas.style.width = `${WIDTH}px`;
-    canvas.style.height = `${HEIGHT}px`;
+    canvas.style.height = "auto"; // keeps the aspect ratio where max-width narrows it
   }
   fitCanvas();
 
