@@ -1,4 +1,4 @@
-"""The live pendulum simulator, and the same animation as self-contained HTML.
+"""The matplotlib pendulum simulator, its exports (HTML, GIF, MP4) for use without a kernel.
 
 The course report (Kanoun, Cowley, Ivachtchenko, MAT332, 2024) studied its
 integrators in an interactive simulator: a swinging pendulum, its kinetic,
@@ -12,16 +12,21 @@ How it renders: the trajectory is computed once per change of a slider (with
 the fast core, a 20 s double-pendulum run takes milliseconds); playing only
 moves through the stored states. Each frame updates the data of a few
 artists, redraws just those over a cached background (blitting into the Agg
-buffer) and sends the PNG to an ``ipywidgets.Image``. An ``ipywidgets.Play``
+buffer) and sends it as a JPEG to an ``ipywidgets.Image``. An ``ipywidgets.Play``
 drives the frame slider at :data:`FPS` frames per second. This works in
 JupyterLab with the inline backend and needs no interactive matplotlib
-backend.
+backend. The course's default simulator is the browser-drawn
+:func:`pendulum_lab.widgets.live_simulator`, which sends the run once instead
+of an image per frame; this one draws the pictures of the report and the
+exports.
 
 Where no kernel is attached (a notebook viewed as a static page), widgets
 cannot run; :func:`html_animation` renders the same drawing as a
 self-contained JavaScript/HTML animation (matplotlib's HTML player, the one
 behind :meth:`matplotlib.animation.Animation.to_jshtml`) whose frames are
-embedded in the output.
+embedded in the output. For slides, :func:`save_animation` (and
+:meth:`Simulator.save`) writes it as an animated GIF (Pillow) or an MP4 (the
+ffmpeg binary that the ``imageio-ffmpeg`` package ships).
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from pathlib import Path
 
 import ipywidgets as widgets
 import numpy as np
-from matplotlib.animation import HTMLWriter
+from matplotlib.animation import FFMpegWriter, HTMLWriter, PillowWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from PIL import Image
@@ -45,32 +50,29 @@ from . import plotting
 from .model import PendulumModel
 from .simulate import Trajectory, step_count
 from .widgets.controls import (
-    control_names,
-    parameter_controls,
-    run_controls,
+    SPEEDS,
+    TRAIL,
+    check_simulator_arguments,
     simulate_controls,
-    start_state,
-    state_controls,
+    simulator_controls,
 )
 from .widgets.instrument import Instrument
 
 __all__ = [
     "FPS",
     "SPEEDS",
+    "TRAIL",
     "PendulumScene",
     "Simulator",
     "count_frames",
     "frame_indices",
     "html_animation",
+    "save_animation",
     "simulator",
 ]
 
-#: Frames per second of the live simulator.
+#: Frames per second of the matplotlib simulator (the default of its exports too).
 FPS = 20
-#: Playback speeds offered: simulated seconds per real second.
-SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
-#: Length of the trail behind the last bob [s].
-TRAIL = 2.0
 TRAIL_COLOUR = "tab:purple"
 BOB_COLOUR = "tab:red"
 
@@ -298,17 +300,9 @@ class Simulator(Instrument):
         speed: float,
         trail: float,
     ):
-        n, keys = model.n, control_names(model.n)
-        controls = {
-            **state_controls(n, theta0, omega0),
-            **parameter_controls(model),
-            **run_controls(method, t_end, dt, t_end_range=(1.0, 60.0)),
-        }
-        columns = [
-            ("Initial state", keys["theta"] + keys["omega"]),
-            ("Parameters", keys["mass"] + keys["length"] + ["g"]),
-            ("Integration", ["method", "dt", "t_end"]),
-        ]
+        controls, columns = simulator_controls(
+            model, theta0, omega0, t_end=t_end, dt=dt, method=method
+        )
         super().__init__(model, controls, columns, rows=1.3)
         self.trail = trail
         self.scene: PendulumScene | None = None
@@ -350,14 +344,14 @@ class Simulator(Instrument):
         self.widget.children = (boxes, playback, status, readout, image)
 
     # ---- the explorer's hooks --------------------------------------------------------------
-    def _compute(self):
+    def compute(self):
         return simulate_controls(self.model.n, self.controls)
 
-    def _draw(self, figure):
+    def draw(self, figure):
         self.scene = PendulumScene(figure, self.model, self.trajectory, self.trail, readout=False)
         self._set_frames(self.speed.value, keep_time=None)
 
-    def _render(self) -> None:
+    def render(self) -> None:
         self._canvas.draw()
         self._background = self._canvas.copy_from_bbox(self.figure.bbox)
         self._blit()
@@ -401,13 +395,23 @@ class Simulator(Instrument):
         if self._background is not None:
             self._blit()
 
-    def _summary(self) -> str:
-        return f"{len(self._frames)} frames at {FPS} fps; " + super()._summary()
+    def summary(self) -> str:
+        return f"{len(self._frames)} frames at {FPS} fps; " + super().summary()
 
     def html(self, **kwargs):
         """:func:`html_animation` of the current run (for viewing without a kernel)."""
         kwargs.setdefault("speed", self.speed.value)
         return html_animation(self.trajectory, self.model, **kwargs)
+
+    def save(self, path, *, fps: float = FPS, seconds: float | None = None, **kwargs) -> Path:
+        """Write the current run, at the current speed, as ``.gif`` or ``.mp4``.
+
+        See :func:`save_animation` for the arguments; returns the path written.
+        """
+        kwargs.setdefault("speed", self.speed.value)
+        kwargs.setdefault("trail", self.trail)
+        return save_animation(self.trajectory, self.model, path, fps=fps, seconds=seconds,
+                              **kwargs)
 
 
 def simulator(
@@ -457,11 +461,9 @@ def simulator(
     >>> sim.time
     1.0
     """
-    model = check.pendulum_model(model)
-    theta0, omega0 = start_state(model.n, theta0, omega0)
-    speed = check.choice("speed", speed, SPEEDS)
-    trail = check.non_negative_number("trail", trail)
-    t_end = check.number_in("t_end", t_end, 1.0, 60.0, "s")
+    model, theta0, omega0, t_end, speed, trail = check_simulator_arguments(
+        model, theta0, omega0, t_end=t_end, speed=speed, trail=trail
+    )
     sim = Simulator(model, method, t_end, dt, theta0, omega0, speed, trail)
     if not sim.update():
         raise ValueError(sim.message)
@@ -470,20 +472,37 @@ def simulator(
 
 #: Default cap on the frames of :func:`html_animation` (each is an embedded PNG).
 MAX_FRAMES = 300
+#: Size of the exported animations' figure [inches].
+EXPORT_SIZE = (9, 3.6)
 
 
-class _BlittingHTMLWriter(HTMLWriter):
-    """matplotlib's HTML player, fed with frames blitted by a scene.
+def _check_run(traj, model) -> None:
+    """A single trajectory and a model, or a clear error naming the argument."""
+    if not isinstance(traj, Trajectory):
+        raise TypeError(f"`traj` must be a Trajectory, got {type(traj).__name__}")
+    check.pendulum_model(model)
 
-    The stock writer saves the whole figure for every frame; redrawing only
+
+def _export_scene(traj, model, trail: float, dpi: float) -> tuple[Figure, PendulumScene]:
+    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the run's scene."""
+    figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
+    FigureCanvasAgg(figure)
+    return figure, PendulumScene(figure, model, traj, trail, animated=True)
+
+
+class _Blitting:
+    """A movie writer whose frames are blitted by a scene (mixed into matplotlib's writers).
+
+    The stock writers save the whole figure for every frame; redrawing only
     the moving artists over a cached background is several times faster.
     """
 
     def __init__(self, scene: PendulumScene, **kwargs):
-        super().__init__(embed_frames=True, **kwargs)
+        super().__init__(**kwargs)
         self._scene, self._background = scene, None
 
-    def grab_frame(self, **savefig_kwargs):
+    def _blit(self) -> memoryview:
+        """Draw the scene's current state; return the canvas's RGBA pixels."""
         canvas = self.fig.canvas
         if self._background is None:  # after setup(), which may adjust the size
             canvas.draw()
@@ -491,8 +510,35 @@ class _BlittingHTMLWriter(HTMLWriter):
         canvas.restore_region(self._background)
         for artist in self._scene.artists:
             self.fig.draw_artist(artist)
-        frame = base64.encodebytes(_encode(canvas, self.frame_format)).decode("ascii")
+        return canvas.buffer_rgba()
+
+
+class _BlittingHTMLWriter(_Blitting, HTMLWriter):
+    """matplotlib's HTML player, each frame an embedded image."""
+
+    def __init__(self, scene: PendulumScene, **kwargs):
+        super().__init__(scene, embed_frames=True, **kwargs)
+
+    def grab_frame(self, **savefig_kwargs):
+        self._blit()
+        frame = base64.encodebytes(_encode(self.fig.canvas, self.frame_format)).decode("ascii")
         self._saved_frames.append(frame)
+
+
+class _BlittingGIFWriter(_Blitting, PillowWriter):
+    """matplotlib's Pillow writer (animated GIF)."""
+
+    def grab_frame(self, **savefig_kwargs):
+        rgba = self._blit()
+        image = Image.frombuffer("RGBA", self.frame_size, rgba, "raw", "RGBA", 0, 1)
+        self._frames.append(image.convert("RGB"))
+
+
+class _BlittingMP4Writer(_Blitting, FFMpegWriter):
+    """matplotlib's ffmpeg pipe writer (raw RGBA frames in, H.264 out)."""
+
+    def grab_frame(self, **savefig_kwargs):
+        self._proc.stdin.write(self._blit())
 
 
 def html_animation(
@@ -547,9 +593,7 @@ def html_animation(
     """
     from IPython.display import HTML
 
-    if not isinstance(traj, Trajectory):
-        raise TypeError(f"`traj` must be a Trajectory, got {type(traj).__name__}")
-    check.pendulum_model(model)
+    _check_run(traj, model)
     max_frames = check.integer_at_least("max_frames", max_frames, 1)
     frames = frame_indices(traj, fps, speed)
     if len(frames) > max_frames:
@@ -557,9 +601,7 @@ def html_animation(
             f"the animation would have {len(frames)} frames, more than `max_frames` = "
             f"{max_frames}; shorten the run, raise `speed` or lower `fps`"
         )
-    figure = Figure(figsize=(9, 3.6), dpi=dpi)
-    FigureCanvasAgg(figure)
-    scene = PendulumScene(figure, model, traj, trail, animated=True)
+    figure, scene = _export_scene(traj, model, trail, dpi)
     writer = _BlittingHTMLWriter(
         scene, fps=fps, default_mode="loop", embed_limit=max_frames
     )  # MB: never the binding limit
@@ -575,3 +617,99 @@ def html_animation(
 def count_frames(html: str) -> int:
     """The number of embedded frames in the output of :func:`html_animation`."""
     return len(re.findall(r"frames\[\d+\] = \"data:image/", html))
+
+
+def _ffmpeg() -> str:
+    """The ffmpeg binary shipped in the ``imageio-ffmpeg`` wheel, or a clear ImportError."""
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise ImportError(
+            "saving an MP4 needs ffmpeg, which the imageio-ffmpeg package ships: "
+            "pip install imageio-ffmpeg (or pendulum_lab[export]); a .gif needs nothing more"
+        ) from None
+    return imageio_ffmpeg.get_ffmpeg_exe()
+
+
+def save_animation(
+    traj: Trajectory,
+    model: PendulumModel,
+    path,
+    *,
+    fps: float = FPS,
+    seconds: float | None = None,
+    speed: float = 1.0,
+    trail: float = TRAIL,
+    dpi: float = 80,
+) -> Path:
+    """Write a run as an animated GIF or an MP4 video, for slides.
+
+    The frames show the drawing of :func:`simulator` (chain, trail,
+    energies, with the time and energies written above), one per
+    :func:`frame_indices`. The file type follows the suffix: ``.gif`` through
+    Pillow (matplotlib's ``PillowWriter``), ``.mp4`` (H.264) through
+    matplotlib's ``FFMpegWriter`` with the ffmpeg of ``imageio-ffmpeg``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A single trajectory of ``model``.
+    model : PendulumModel
+    path : str or Path
+        Ends in ``.gif`` or ``.mp4``.
+    fps : float
+        Frames per second of the file, ``> 0``.
+    seconds : float, optional
+        Length of the animation [s of playing time], ``> 0``; by default the
+        whole run. Never more frames than the run has.
+    speed : float
+        Simulated seconds per second of animation.
+    trail : float
+        Trail length [s].
+    dpi : float
+        Resolution; the figure is 9 x 3.6 inches.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ImportError
+        For ``.mp4`` without ``imageio-ffmpeg``, saying how to install it.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from PIL import Image
+    >>> import pendulum_lab as pl
+    >>> sp_ = pl.simple_pendulum()
+    >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     gif = save_animation(traj, sp_, pathlib.Path(folder, "swing.gif"), fps=5, dpi=40)
+    ...     Image.open(gif).n_frames
+    6
+    """
+    from matplotlib import rc_context
+
+    _check_run(traj, model)
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"`path` must end in .gif or .mp4, got {path.name!r}")
+    frames = frame_indices(traj, fps, speed)
+    if seconds is not None:
+        seconds = check.positive_number("seconds", seconds)
+        frames = frames[: max(1, round(seconds * fps))]
+    settings = {} if suffix == ".gif" else {"animation.ffmpeg_path": _ffmpeg()}
+    figure, scene = _export_scene(traj, model, trail, dpi)
+    if suffix == ".gif":
+        writer = _BlittingGIFWriter(scene, fps=fps)
+    else:
+        writer = _BlittingMP4Writer(scene, fps=fps, codec="h264")
+    with rc_context(settings), writer.saving(figure, str(path), dpi):
+        for index in frames:
+            scene.show(index)
+            writer.grab_frame()
+    return path

@@ -1,10 +1,12 @@
-"""The controls the explorers and the simulator share: sliders, dropdowns, their model.
+"""The controls the explorers and the simulators share: sliders, dropdowns, their model.
 
-A public internal module: :mod:`pendulum_lab.widgets` and
-:mod:`pendulum_lab.animation` build their panels from these pieces, and a new
-instrument (a live simulator, say) should too. Control names are fixed:
-``theta1``, ..., ``omega1``, ..., ``m1``, ..., ``l1``, ..., ``g``, ``method``,
-``dt``, ``t_end`` (``theta``, ``omega``, ``mass``, ``length`` for one link).
+A public internal module: the explorers of :mod:`pendulum_lab.widgets`, the
+matplotlib simulator of :mod:`pendulum_lab.animation` and the browser-drawn
+instruments of :mod:`pendulum_lab.widgets.live` and
+:mod:`pendulum_lab.widgets.clickable` build their panels from these pieces,
+and a new instrument should too. Control names are fixed: ``theta1``, ...,
+``omega1``, ..., ``m1``, ..., ``l1``, ..., ``g``, ``method``, ``dt``,
+``t_end`` (``theta``, ``omega``, ``mass``, ``length`` for one link).
 """
 
 from __future__ import annotations
@@ -23,6 +25,10 @@ from ..simulate import Trajectory, simulate, step_count
 __all__ = [
     "DT_CHOICES",
     "MAX_STEPS",
+    "SIMULATOR_T_END",
+    "SPEEDS",
+    "TRAIL",
+    "check_simulator_arguments",
     "check_steps",
     "column",
     "control_names",
@@ -30,6 +36,7 @@ __all__ = [
     "parameter_controls",
     "run_controls",
     "simulate_controls",
+    "simulator_controls",
     "slider",
     "start_state",
     "state_controls",
@@ -40,6 +47,12 @@ __all__ = [
 DT_CHOICES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5)
 #: Largest number of steps one update may take (``t_end / dt``).
 MAX_STEPS = 100_000
+#: Playback speeds the simulators offer: simulated seconds per real second.
+SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+#: Default length of the trail behind the last bob [s].
+TRAIL = 2.0
+#: The range of a simulator's run length ``t_end`` [s].
+SIMULATOR_T_END = (1.0, 60.0)
 
 DESCRIPTION_WIDTH = "88px"
 SLIDER_WIDTH = "310px"
@@ -154,6 +167,12 @@ def model_from_controls(n: int, controls: dict) -> PendulumModel:
 
 
 def state_from_controls(n: int, controls: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The initial angles [rad] and angular velocities [rad/s] the state controls hold.
+
+    Returns
+    -------
+    theta0, omega0 : ndarray, shape (n,)
+    """
     keys = control_names(n)
     return (
         np.array([controls[k].value for k in keys["theta"]], dtype=float),
@@ -173,6 +192,7 @@ def check_steps(t_end: float, dt: float) -> int:
 
 
 def column(title: str, controls: Sequence[widgets.Widget]) -> widgets.VBox:
+    """A column of controls under a bold title (one group of an instrument's panel)."""
     return widgets.VBox([widgets.HTML(f"<b>{title}</b>"), *controls])
 
 
@@ -212,3 +232,68 @@ def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumMode
     traj = simulate(model, theta0, omega0, t_end=c["t_end"].value, dt=c["dt"].value,
                     method=c["method"].value, progress=False)
     return model, traj
+
+
+def simulator_controls(
+    model: PendulumModel, theta0, omega0, *, t_end: float, dt: float, method
+) -> tuple[dict, list[tuple[str, list[str]]]]:
+    """A simulator's controls and their columns: the explorer's, with ``t_end`` in
+    :data:`SIMULATOR_T_END`.
+
+    Shared by the matplotlib simulator (:func:`pendulum_lab.animation.simulator`)
+    and the browser-drawn one (:func:`pendulum_lab.widgets.live_simulator`).
+
+    Returns
+    -------
+    controls : dict of str -> ipywidgets widget
+    columns : list of (title, list of control names)
+        For :class:`~pendulum_lab.widgets.Instrument`.
+    """
+    n, keys = model.n, control_names(model.n)
+    controls = {
+        **state_controls(n, theta0, omega0),
+        **parameter_controls(model),
+        **run_controls(method, t_end, dt, t_end_range=SIMULATOR_T_END),
+    }
+    columns = [
+        ("Initial state", keys["theta"] + keys["omega"]),
+        ("Parameters", keys["mass"] + keys["length"] + ["g"]),
+        ("Integration", ["method", "dt", "t_end"]),
+    ]
+    return controls, columns
+
+
+def check_simulator_arguments(model, theta0, omega0, *, t_end, speed, trail):
+    """A simulator's arguments checked, with the default start filled in.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0 : array_like, shape (n,), or None
+        As for :func:`start_state`.
+    t_end : float
+        In :data:`SIMULATOR_T_END` [s].
+    speed : float
+        One of :data:`SPEEDS`.
+    trail : float
+        Trail length [s], ``>= 0``.
+
+    Returns
+    -------
+    tuple
+        ``(model, theta0, omega0, t_end, speed, trail)``, each checked.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> _, theta0, omega0, *rest = check_simulator_arguments(
+    ...     pl.double_pendulum(), None, None, t_end=20.0, speed=1.0, trail=2.0)
+    >>> theta0.tolist(), omega0.tolist(), rest
+    ([2.0, 2.5], [0.0, 0.0], [20.0, 1.0, 2.0])
+    """
+    model = check.pendulum_model(model)
+    theta0, omega0 = start_state(model.n, theta0, omega0)
+    speed = check.choice("speed", speed, SPEEDS)
+    trail = check.non_negative_number("trail", trail)
+    t_end = check.number_in("t_end", t_end, *SIMULATOR_T_END, "s")
+    return model, theta0, omega0, t_end, speed, trail
