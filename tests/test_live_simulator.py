@@ -11,6 +11,7 @@ import pytest
 import traitlets
 
 import pendulum_lab as pl
+from pendulum_lab import widgets
 from pendulum_lab.widgets import channel, clickable, live
 from pendulum_lab.widgets.live import (
     live_simulator,
@@ -130,6 +131,21 @@ def test_playback_traits_are_validated(sim):
         live_simulator(DP, t_end=2.0, speed=3.0)
     with pytest.raises(ValueError, match="t_end"):
         live_simulator(DP, t_end=100.0)
+
+
+def test_the_live_simulator_is_an_instrument_without_a_figure(sim):
+    import ipywidgets
+
+    assert isinstance(sim, widgets.Instrument) and sim.figure is None
+    children = sim.widget.children
+    assert not any(isinstance(child, ipywidgets.Image) for child in children)
+    assert isinstance(children[-1], live.PendulumView) and children[-1] is sim.view
+    # Its controls are the matplotlib simulator's (one definition for both).
+    from pendulum_lab import animation
+
+    other = animation.simulator(DP, t_end=4.0, dt=0.01)
+    assert list(sim.controls) == list(other.controls)
+    assert sim.controls["t_end"].max == other.controls["t_end"].max == 60.0
 
 
 def test_a_failed_run_keeps_the_previous_one_and_says_why(sim, monkeypatch):

@@ -50,11 +50,12 @@ from . import plotting
 from .model import PendulumModel
 from .simulate import Trajectory, step_count
 from .widgets.controls import (
+    SIMULATOR_T_END,
     SPEEDS,
     TRAIL,
-    check_simulator_arguments,
+    build_simulator,
+    pendulum_controls,
     simulate_controls,
-    simulator_controls,
 )
 from .widgets.instrument import Instrument
 
@@ -300,8 +301,8 @@ class Simulator(Instrument):
         speed: float,
         trail: float,
     ):
-        controls, columns = simulator_controls(
-            model, theta0, omega0, t_end=t_end, dt=dt, method=method
+        controls, columns = pendulum_controls(
+            model, theta0, omega0, t_end=t_end, dt=dt, method=method, t_end_range=SIMULATOR_T_END
         )
         super().__init__(model, controls, columns, rows=1.3)
         self.trail = trail
@@ -461,13 +462,10 @@ def simulator(
     >>> sim.time
     1.0
     """
-    model, theta0, omega0, t_end, speed, trail = check_simulator_arguments(
-        model, theta0, omega0, t_end=t_end, speed=speed, trail=trail
+    return build_simulator(
+        Simulator, model, theta0, omega0, t_end=t_end, dt=dt, method=method, speed=speed,
+        trail=trail,
     )
-    sim = Simulator(model, method, t_end, dt, theta0, omega0, speed, trail)
-    if not sim.update():
-        raise ValueError(sim.message)
-    return sim
 
 
 #: Default cap on the frames of :func:`html_animation` (each is an embedded PNG).

@@ -28,15 +28,15 @@ __all__ = [
     "SIMULATOR_T_END",
     "SPEEDS",
     "TRAIL",
-    "check_simulator_arguments",
+    "build_simulator",
     "check_steps",
     "column",
     "control_names",
     "model_from_controls",
     "parameter_controls",
+    "pendulum_controls",
     "run_controls",
     "simulate_controls",
-    "simulator_controls",
     "slider",
     "start_state",
     "state_controls",
@@ -234,14 +234,22 @@ def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumMode
     return model, traj
 
 
-def simulator_controls(
-    model: PendulumModel, theta0, omega0, *, t_end: float, dt: float, method
+def pendulum_controls(
+    model: PendulumModel,
+    theta0,
+    omega0,
+    *,
+    t_end: float,
+    dt: float,
+    method,
+    t_end_range=(0.1, 100.0),
 ) -> tuple[dict, list[tuple[str, list[str]]]]:
-    """A simulator's controls and their columns: the explorer's, with ``t_end`` in
-    :data:`SIMULATOR_T_END`.
+    """The controls of a whole pendulum run and their columns, as :func:`explore` shows them.
 
-    Shared by the matplotlib simulator (:func:`pendulum_lab.animation.simulator`)
-    and the browser-drawn one (:func:`pendulum_lab.widgets.live_simulator`).
+    Initial state (:func:`state_controls`), parameters
+    (:func:`parameter_controls`) and integration (:func:`run_controls`, with
+    ``t_end`` in ``t_end_range`` [s]): the panel of the explorer and of both
+    simulators (which pass :data:`SIMULATOR_T_END`).
 
     Returns
     -------
@@ -253,7 +261,7 @@ def simulator_controls(
     controls = {
         **state_controls(n, theta0, omega0),
         **parameter_controls(model),
-        **run_controls(method, t_end, dt, t_end_range=SIMULATOR_T_END),
+        **run_controls(method, t_end, dt, t_end_range=t_end_range),
     }
     columns = [
         ("Initial state", keys["theta"] + keys["omega"]),
@@ -263,16 +271,25 @@ def simulator_controls(
     return controls, columns
 
 
-def check_simulator_arguments(model, theta0, omega0, *, t_end, speed, trail):
-    """A simulator's arguments checked, with the default start filled in.
+def build_simulator(
+    simulator_class, model, theta0, omega0, *, t_end, dt, method, speed, trail
+):
+    """Check a simulator's arguments, build it and compute its first run.
+
+    The one entry of both simulators (:func:`pendulum_lab.animation.simulator`
+    and :func:`pendulum_lab.widgets.live_simulator`).
 
     Parameters
     ----------
+    simulator_class : type
+        Called as ``simulator_class(model, method, t_end, dt, theta0, omega0,
+        speed, trail)``; an :class:`~pendulum_lab.widgets.Instrument`.
     model : PendulumModel
     theta0, omega0 : array_like, shape (n,), or None
-        As for :func:`start_state`.
-    t_end : float
-        In :data:`SIMULATOR_T_END` [s].
+        As for :func:`start_state` (the default start when None).
+    t_end, dt : float
+        ``t_end`` in :data:`SIMULATOR_T_END` [s].
+    method : str
     speed : float
         One of :data:`SPEEDS`.
     trail : float
@@ -280,20 +297,21 @@ def check_simulator_arguments(model, theta0, omega0, *, t_end, speed, trail):
 
     Returns
     -------
-    tuple
-        ``(model, theta0, omega0, t_end, speed, trail)``, each checked.
+    Instrument
+        The simulator, its first run computed.
 
-    Examples
-    --------
-    >>> import pendulum_lab as pl
-    >>> _, theta0, omega0, *rest = check_simulator_arguments(
-    ...     pl.double_pendulum(), None, None, t_end=20.0, speed=1.0, trail=2.0)
-    >>> theta0.tolist(), omega0.tolist(), rest
-    ([2.0, 2.5], [0.0, 0.0], [20.0, 1.0, 2.0])
+    Raises
+    ------
+    ValueError
+        For an argument out of range, or a first run that cannot be computed
+        (the simulator's message).
     """
     model = check.pendulum_model(model)
     theta0, omega0 = start_state(model.n, theta0, omega0)
     speed = check.choice("speed", speed, SPEEDS)
     trail = check.non_negative_number("trail", trail)
     t_end = check.number_in("t_end", t_end, *SIMULATOR_T_END, "s")
-    return model, theta0, omega0, t_end, speed, trail
+    sim = simulator_class(model, method, t_end, dt, theta0, omega0, speed, trail)
+    if not sim.update():
+        raise ValueError(sim.message)
+    return sim

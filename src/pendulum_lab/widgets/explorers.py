@@ -28,6 +28,7 @@ from .controls import (
     check_steps,
     control_names,
     parameter_controls,
+    pendulum_controls,
     run_controls,
     simulate_controls,
     slider,
@@ -65,19 +66,10 @@ class Explorer(Instrument):
     def __init__(
         self, model: PendulumModel, method, t_end: float, dt: float, theta0, omega0, plots: Sequence
     ):
-        n = model.n
-        self.panels = resolve_panels(plots, n)
-        controls = {
-            **state_controls(n, theta0, omega0),
-            **parameter_controls(model),
-            **run_controls(method, t_end, dt),
-        }
-        keys = control_names(n)
-        columns = [
-            ("Initial state", keys["theta"] + keys["omega"]),
-            ("Parameters", keys["mass"] + keys["length"] + ["g"]),
-            ("Integration", ["method", "dt", "t_end"]),
-        ]
+        self.panels = resolve_panels(plots, model.n)
+        controls, columns = pendulum_controls(
+            model, theta0, omega0, t_end=t_end, dt=dt, method=method
+        )
         self._rows, self._cols = panel_grid(len(self.panels))
         super().__init__(model, controls, columns, rows=self._rows)
 

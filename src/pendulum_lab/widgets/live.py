@@ -37,12 +37,13 @@ from ..plotting import wrap_angle
 from ..simulate import Trajectory
 from .channel import STATIC, ReplayWidget, float32_buffer
 from .controls import (
+    SIMULATOR_T_END,
     SPEEDS,
     TRAIL,
-    check_simulator_arguments,
+    build_simulator,
     control_names,
+    pendulum_controls,
     simulate_controls,
-    simulator_controls,
 )
 from .instrument import Instrument
 
@@ -276,8 +277,8 @@ class LiveSimulator(Instrument):
     """
 
     def __init__(self, model, method, t_end, dt, theta0, omega0, speed, trail):
-        controls, columns = simulator_controls(
-            model, theta0, omega0, t_end=t_end, dt=dt, method=method
+        controls, columns = pendulum_controls(
+            model, theta0, omega0, t_end=t_end, dt=dt, method=method, t_end_range=SIMULATOR_T_END
         )
         self.view = PendulumView(speed=speed, trail=trail)
         super().__init__(model, controls, columns, figure=False)
@@ -367,26 +368,14 @@ def live_simulator(
 ) -> LiveSimulator:
     """The live pendulum simulator, drawn in the browser at the display's frame rate.
 
-    Parameters
-    ----------
-    model : PendulumModel
-        A simple, double or longer pendulum; its parameters are the sliders'
-        start values.
-    theta0, omega0 : array_like, shape (n,), optional
-        Initial angles [rad] in ``[-pi, pi]`` and angular velocities [rad/s]
-        in ``[-10, 10]``; by default 1 rad for one link, ``(2.0, 2.5)`` for
-        two, at rest.
-    t_end, dt : float
-        Length of the run and step [s]; ``t_end`` in ``[1, 60]``.
-    method : str
-        A key of :data:`pendulum_lab.METHODS`.
-    speed : float
-        Playback speed, one of :data:`~pendulum_lab.widgets.controls.SPEEDS`.
-    trail : float
-        Length of the last bob's trail [s], ``>= 0``.
-
-    The same arguments as :func:`pendulum_lab.animation.simulator`, the
-    matplotlib simulator kept for the report and for export.
+    Takes the arguments of :func:`pendulum_lab.animation.simulator`, the
+    matplotlib simulator kept for the report and for export: the model (its
+    parameters are the sliders' start values), the initial angles [rad] in
+    ``[-pi, pi]`` and angular velocities [rad/s] in ``[-10, 10]`` (by default
+    1 rad for one link, ``(2.0, 2.5)`` for two, at rest), the run's length
+    ``t_end`` in ``[1, 60]`` s and step ``dt``, the method, the playback
+    ``speed`` (one of :data:`~pendulum_lab.widgets.controls.SPEEDS`) and the
+    length of the last bob's ``trail`` [s].
 
     Returns
     -------
@@ -404,10 +393,7 @@ def live_simulator(
     >>> sim.trajectory.theta[0].round(4).tolist(), sim.trajectory.omega[0].tolist()
     ([1.5708, 2.5], [0.0, 0.0])
     """
-    model, theta0, omega0, t_end, speed, trail = check_simulator_arguments(
-        model, theta0, omega0, t_end=t_end, speed=speed, trail=trail
+    return build_simulator(
+        LiveSimulator, model, theta0, omega0, t_end=t_end, dt=dt, method=method, speed=speed,
+        trail=trail,
     )
-    sim = LiveSimulator(model, method, t_end, dt, theta0, omega0, speed, trail)
-    if not sim.update():
-        raise ValueError(sim.message)
-    return sim
