@@ -77,6 +77,8 @@ class Config:
     flip_t_end: float = 10.0
     limit_members: int = 4000  # item 6: ensemble verified against the C loop
     limit_steps: int = 200
+    live_rounds: int = 15  # item 7: interleaved update/recompute rounds in the kernel
+    live_browser_seconds: float = 5.0  # item 7: play time counted in Chromium (0: not run)
 
 
 FULL = Config("full")
@@ -98,6 +100,8 @@ QUICK = replace(
     flip_size=40,
     flip_t_end=5.0,
     limit_members=400,
+    live_rounds=4,
+    live_browser_seconds=2.0,
 )
 SMOKE = replace(
     FULL,
@@ -124,6 +128,8 @@ SMOKE = replace(
     flip_t_end=1.0,
     limit_members=16,
     limit_steps=10,
+    live_rounds=1,
+    live_browser_seconds=0.0,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 
