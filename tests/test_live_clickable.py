@@ -117,6 +117,17 @@ def test_the_frame_maps_data_to_the_picture(section):
     assert frame["labels"] == ["θ₂ (rad)", "p₂ (kg m²/s)"]
 
 
+def test_display_carries_the_picture_clicks_land_on(section):
+    import base64
+
+    bundle = section._repr_mimebundle_()
+    assert "application/vnd.jupyter.widget-view+json" in bundle
+    assert base64.b64decode(bundle["image/png"]) == section.plot.background
+    section.controls["energy"].value = -5.0  # a new surface, a new picture
+    assert base64.b64decode(section._repr_mimebundle_()["image/png"]) == section.plot.background
+    assert base64.b64decode(bundle["image/png"]) != section.plot.background
+
+
 def test_section_explorer_refuses_other_models_and_energies():
     with pytest.raises(ValueError, match="double pendulum"):
         section_explorer(SP)

@@ -1,7 +1,11 @@
 """The explorers driven headlessly: set a control, check the recomputed trajectory and figure."""
 
+import base64
+import io
+
 import numpy as np
 import pytest
+from PIL import Image
 
 import pendulum_lab as pl
 from pendulum_lab import analysis, widgets
@@ -214,6 +218,23 @@ def test_explorer_displays_as_its_widget(dp_explorer):
     assert bundle["application/vnd.jupyter.widget-view+json"]["model_id"] == (
         dp_explorer.widget.model_id
     )
+
+
+def test_display_carries_the_current_figure_as_a_picture(dp_explorer):
+    """Where no kernel runs (the course website), the PNG in the display stands in for the
+    widget: it must be the figure as drawn now, at the figure's size."""
+
+    def picture(explorer):
+        data = base64.b64decode(explorer._repr_mimebundle_()["image/png"])
+        return data, Image.open(io.BytesIO(data))
+
+    before, image = picture(dp_explorer)
+    width, height = dp_explorer.figure.get_size_inches() * dp_explorer.figure.dpi
+    assert image.size == (round(width), round(height))
+    dp_explorer.controls["theta1"].value = 0.3
+    after, _ = picture(dp_explorer)
+    # Negative control: a picture taken once, at creation, would fail here.
+    assert after != before
 
 
 def test_three_link_chain():

@@ -47,6 +47,7 @@ from PIL import Image
 
 from . import _validation as check
 from . import plotting
+from ._png import png_bytes
 from .model import PendulumModel
 from .simulate import Trajectory, step_count
 from .widgets.controls import (
@@ -70,6 +71,7 @@ __all__ = [
     "html_animation",
     "save_animation",
     "simulator",
+    "still_frame",
 ]
 
 #: Frames per second of the matplotlib simulator (the default of its exports too).
@@ -472,6 +474,9 @@ def simulator(
 MAX_FRAMES = 300
 #: Size of the exported animations' figure [inches].
 EXPORT_SIZE = (9, 3.6)
+# matplotlib's player links its button icons from a CDN; an animation must not load anything
+# from outside (JupyterLab and the course website have the icon font already).
+_EXTERNAL_LINK = re.compile(r"<link\b[^>]*\bhref=[\"']https?://[^>]*>\s*", re.IGNORECASE)
 
 
 def _check_run(traj, model) -> None:
@@ -481,11 +486,13 @@ def _check_run(traj, model) -> None:
     check.pendulum_model(model)
 
 
-def _export_scene(traj, model, trail: float, dpi: float) -> tuple[Figure, PendulumScene]:
+def _export_scene(
+    traj, model, trail: float, dpi: float, animated: bool = True
+) -> tuple[Figure, PendulumScene]:
     """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the run's scene."""
     figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
     FigureCanvasAgg(figure)
-    return figure, PendulumScene(figure, model, traj, trail, animated=True)
+    return figure, PendulumScene(figure, model, traj, trail, animated=animated)
 
 
 class _Blitting:
@@ -609,7 +616,7 @@ def html_animation(
             for index in frames:
                 scene.show(index)
                 writer.grab_frame()
-        return HTML(path.read_text(encoding="utf-8"))
+        return HTML(_EXTERNAL_LINK.sub("", path.read_text(encoding="utf-8")))
 
 
 def count_frames(html: str) -> int:
@@ -711,3 +718,53 @@ def save_animation(
             scene.show(index)
             writer.grab_frame()
     return path
+
+
+def still_frame(
+    traj: Trajectory,
+    model: PendulumModel,
+    *,
+    index: int | None = None,
+    trail: float = TRAIL,
+    dpi: float = 80,
+) -> bytes:
+    """One frame of a run's animation as a PNG: by default the last, with the whole run's energies.
+
+    The drawing of :func:`html_animation` and :func:`save_animation` (chain,
+    trail, kinetic, potential and total energy up to that state, the time
+    and energies written above), for a page that cannot play anything: the
+    browser-drawn :func:`pendulum_lab.widgets.live_simulator` shows it where
+    no kernel runs.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A single trajectory of ``model``.
+    model : PendulumModel
+    index : int, optional
+        The saved state shown, ``0 <= index < len(traj.t)``; default the last.
+    trail : float
+        Trail length [s].
+    dpi : float
+        Resolution; the figure is 9 x 3.6 inches.
+
+    Returns
+    -------
+    bytes
+        The PNG file's bytes.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> sp_ = pl.simple_pendulum()
+    >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
+    >>> still_frame(traj, sp_, dpi=40)[:8]
+    b'\\x89PNG\\r\\n\\x1a\\n'
+    """
+    _check_run(traj, model)
+    last = len(traj.t) - 1
+    index = last if index is None else check.index_below("index", index, last + 1)
+    figure, scene = _export_scene(traj, model, trail, dpi, animated=False)
+    scene.show(index)
+    figure.canvas.draw()
+    return png_bytes(np.asarray(figure.canvas.buffer_rgba()))

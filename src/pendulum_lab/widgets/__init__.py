@@ -24,8 +24,11 @@ draw them; nothing is fetched from a CDN):
 * :func:`portrait_explorer` -- the simple pendulum's phase portrait; a click
   launches the orbit through that point.
 
-In a notebook cell, ``pl.widgets.explore(model)`` shows the explorer (it
-has ``_ipython_display_``). Each explorer keeps what it shows inspectable:
+In a notebook cell, ``pl.widgets.explore(model)`` shows the explorer. Its
+display carries the widget and a picture of what it shows (``image/png``, or
+``image/jpeg`` for the simulator): a live front end shows the widget, a
+static page (the course website, a notebook viewer) the picture. Each
+explorer keeps what it shows inspectable:
 ``controls`` (name -> widget), ``trajectory``, ``figure``, ``message`` and
 ``update()``, so it can be driven without a browser::
 

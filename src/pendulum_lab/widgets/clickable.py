@@ -44,7 +44,7 @@ from ..model import PendulumModel
 from ..simulate import simulate
 from .channel import STATIC, ReplayWidget, float32_buffer
 from .controls import check_steps, column, run_controls, slider
-from .instrument import EXPECTED_ERRORS
+from .instrument import EXPECTED_ERRORS, WidgetWithPicture
 
 __all__ = [
     "ClickablePlot",
@@ -103,7 +103,7 @@ class Orbit:
     label: str
 
 
-class ClickExplorer:
+class ClickExplorer(WidgetWithPicture):
     """Controls, a clickable picture, undo and clear; the explorers below fill in the physics.
 
     Subclasses implement ``_draw_background(ax)`` (draw the picture into
@@ -235,10 +235,10 @@ class ClickExplorer:
         check_steps(c["t_end"].value, c["dt"].value)
         return {"t_end": c["t_end"].value, "dt": c["dt"].value, "method": c["method"].value}
 
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
-
-        display(self.widget)
+    def picture(self) -> tuple[str, bytes]:
+        """The picture clicks launch orbits on, for a page without a kernel (which shows the
+        explorer as it starts: the orbits launched in the browser are drawn there, not here)."""
+        return "image/png", self.plot.background
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.model!r}, {len(self.orbits)} orbits)"

@@ -12,6 +12,7 @@ simulator of :mod:`pendulum_lab.widgets.live` sends it to the browser).
 
 from __future__ import annotations
 
+import base64
 import warnings
 from collections.abc import Mapping
 
@@ -27,7 +28,7 @@ from ..model import PendulumModel
 from ..simulate import Trajectory
 from .controls import column
 
-__all__ = ["DPI", "EXPECTED_ERRORS", "ROW_HEIGHT", "WIDTH", "Instrument"]
+__all__ = ["DPI", "EXPECTED_ERRORS", "ROW_HEIGHT", "WIDTH", "Instrument", "WidgetWithPicture"]
 
 DPI = 90
 ROW_HEIGHT = 3.4  # inches per row of panels
@@ -40,7 +41,29 @@ EXPECTED_ERRORS = (ValueError, TypeError, ConvergenceError, FloatingPointError, 
 _COLOURS = {"info": "#333", "warning": "#9a6700", "error": "#b00020"}
 
 
-class Instrument:
+class WidgetWithPicture:
+    """Displays as its ``widget``, with a still :meth:`picture` of it in the same display.
+
+    A live front end (JupyterLab) shows the widget; a page without a kernel
+    (the course website, a notebook viewer) shows the picture instead of
+    controls that would do nothing. No ``_ipython_display_``: IPython would
+    use it instead of the bundle.
+    """
+
+    widget = None
+
+    def picture(self) -> tuple[str, bytes]:
+        """A still picture of what the widget shows: ``(mime type, bytes)``."""
+        raise NotImplementedError
+
+    def _repr_mimebundle_(self, **kwargs):
+        bundle = self.widget._repr_mimebundle_(**kwargs)
+        mime, data = self.picture()
+        bundle[mime] = base64.b64encode(data).decode()
+        return bundle
+
+
+class Instrument(WidgetWithPicture):
     """Controls, a status line and a view of the run that :meth:`update` recomputes.
 
     Subclasses implement :meth:`compute` (build the model and the trajectory
@@ -227,13 +250,10 @@ class Instrument:
             self.set_message(self.summary())
         return True
 
-    def _ipython_display_(self) -> None:
-        from IPython.display import display
 
-        display(self.widget)
-
-    def _repr_mimebundle_(self, **kwargs):
-        return self.widget._repr_mimebundle_(**kwargs)
+    def picture(self) -> tuple[str, bytes]:
+        """The figure as drawn now: ``(mime type, bytes)``; one without a figure overrides this."""
+        return f"image/{self._image.format}", self._image.value
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.model!r})"

@@ -300,6 +300,13 @@ class LiveSimulator(Instrument):
         problem = kind != "info"
         self.view.show_message(text if problem else "", "error" if problem else "info")
 
+    def picture(self) -> tuple[str, bytes]:
+        """The run drawn by :func:`pendulum_lab.animation.still_frame` at its last state (the
+        whole motion's energies), for a page without a kernel, where nothing can play."""
+        from ..animation import still_frame  # animation builds on the widgets' controls
+
+        return "image/png", still_frame(self.trajectory, self.model, trail=self.view.trail)
+
     # ---- dragging ---------------------------------------------------------------------------
     def drag(self, bob: int, x: float, y: float, theta=None) -> bool:
         """Release bob ``bob`` (0-based) at ``(x, y)`` [m] and start the motion from there, at rest.
