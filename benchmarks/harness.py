@@ -85,6 +85,8 @@ class Config:
     bif_steps_per_period: int = 100
     bif_rounds: int = 2
     bif_c_members: int = 20  # members the C loop runs for its time per step
+    live_rounds: int = 15  # item 9: interleaved update/recompute rounds in the kernel
+    live_browser_seconds: float = 5.0  # item 9: play time counted in Chromium (0: not run)
 
 
 FULL = Config("full")
@@ -112,6 +114,8 @@ QUICK = replace(
     bif_transient=60,
     bif_rounds=1,
     bif_c_members=10,
+    live_rounds=4,
+    live_browser_seconds=2.0,
 )
 SMOKE = replace(
     FULL,
@@ -146,6 +150,8 @@ SMOKE = replace(
     bif_steps_per_period=10,
     bif_rounds=1,
     bif_c_members=2,
+    live_rounds=1,
+    live_browser_seconds=0.0,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

@@ -1,6 +1,6 @@
-"""The benchmark suite (issue 7; items 7 and 8 from issues 12 and 13), each a ratio side by side.
+"""The benchmark suite (issue 7; items 7, 8, 9 from issues 12, 13, 16), each a ratio side by side.
 
-One file per item (``item_slider.py`` ... ``item_bifurcation.py``) and a shared
+One file per item (``item_slider.py`` ... ``item_live.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
 machine's description). This module lists the items and runs them;
 ``benchmarks/run.py`` is the command-line front end; see
@@ -34,6 +34,7 @@ from item_bifurcation import bench_bifurcation
 from item_c_limit import bench_c_limit
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
+from item_live import bench_live
 from item_long_run import bench_long_run
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
@@ -67,6 +68,7 @@ ITEMS = {
     "c_limit": (6, bench_c_limit, True),
     "variational": (7, bench_variational, False),
     "bifurcation": (8, bench_bifurcation, False),
+    "live": (9, bench_live, False),
 }
 
 

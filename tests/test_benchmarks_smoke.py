@@ -65,6 +65,20 @@ def test_each_item_runs_and_returns_rows(suite, key):
     well_formed(suite, section, suite.ITEMS[key][0])
 
 
+def test_live_item_counts_the_bytes_of_one_run(suite):
+    """Item 7 in the smoke configuration: the kernel rows only (no browser), and the byte
+    count is exactly the run's float32 arrays."""
+    (section,) = suite.run_items(suite.SMOKE, ["live"], log=lambda _: None)
+    well_formed(suite, section, 7)
+    assert [row.result for row in section.rows][-1] == "not available"  # no browser in smoke
+    kernel = section.data["kernel"]
+    assert kernel["steps"] == 2000 and kernel["messages"] == 1
+    # 2001 states of (2 angles, 3 energies, 1 energy error) as float32.
+    assert kernel["buffer_bytes"] == 2001 * 6 * 4
+    # The matplotlib simulator's frames: 20 s at 20 frames per second, and many more bytes.
+    assert kernel["frames"] == 401 and kernel["image_bytes"] > 10 * kernel["buffer_bytes"]
+
+
 def test_a_failing_item_becomes_an_error_row(suite, monkeypatch):
     def broken(cfg):
         raise RuntimeError("boom")

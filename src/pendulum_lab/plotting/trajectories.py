@@ -190,7 +190,8 @@ def plot_phase_portrait(
     rotations (``E > m g l``) green, and the separatrix ``E = m g l`` through
     the upright saddle red. The center at ``(0, 0)`` and the saddles at
     ``(+-pi, 0)`` are marked. A ``trajectory`` is drawn on top (thick, with its
-    start marked).
+    start marked), its angles wrapped into ``(-pi, pi]``; the window grows
+    to hold all of it.
 
     Parameters
     ----------
@@ -198,7 +199,8 @@ def plot_phase_portrait(
         A simple pendulum.
     omega_max : float, optional
         Half-height of the window [rad/s]; default 1.6 times the separatrix's
-        top speed ``2 sqrt(g / l)``.
+        top speed ``2 sqrt(g / l)``. If the ``trajectory`` is faster
+        somewhere, the window widens to 1.08 times its largest ``|omega|``.
     libration_levels, rotation_levels : int
         How many level sets of each kind to draw.
     """
@@ -211,6 +213,12 @@ def plot_phase_portrait(
     mass, length, g = model.masses[0], model.lengths[0], model.g
     top_speed = 2.0 * np.sqrt(abs(g) / length)
     omega_max = 1.6 * top_speed if omega_max is None else float(omega_max)
+    traj = None if trajectory is None else single_trajectory(trajectory)
+    if traj is not None:
+        speeds = np.abs(traj.omega[:, 0])
+        speeds = speeds[np.isfinite(speeds)]
+        if speeds.size and speeds.max() > omega_max:
+            omega_max = 1.08 * float(speeds.max())
     theta = np.linspace(-np.pi, np.pi, 401)
     omega = np.linspace(-omega_max, omega_max, 401)
     big_theta, big_omega = np.meshgrid(theta, omega)
@@ -246,8 +254,7 @@ def plot_phase_portrait(
     ax.plot([], [], color=LIBRATION, label="libration")
     ax.plot([], [], color=ROTATION, label="rotation")
     ax.plot([], [], color=SEPARATRIX, lw=2, label="separatrix")
-    if trajectory is not None:
-        traj = single_trajectory(trajectory)
+    if traj is not None:
         x, y = broken_at_wraps(traj.theta[:, 0], traj.omega[:, 0])
         ax.plot(x, y, color="black", lw=2.2, label="trajectory")
         ax.plot(x[0], y[0], "o", color="gold", mec="black", ms=9, zorder=5)
