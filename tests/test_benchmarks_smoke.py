@@ -66,10 +66,10 @@ def test_each_item_runs_and_returns_rows(suite, key):
 
 
 def test_live_item_counts_the_bytes_of_one_run(suite):
-    """Item 7 in the smoke configuration: the kernel rows only (no browser), and the byte
+    """Item 9 in the smoke configuration: the kernel rows only (no browser), and the byte
     count is exactly the run's float32 arrays."""
     (section,) = suite.run_items(suite.SMOKE, ["live"], log=lambda _: None)
-    well_formed(suite, section, 7)
+    well_formed(suite, section, suite.ITEMS["live"][0])
     assert [row.result for row in section.rows][-1] == "not available"  # no browser in smoke
     kernel = section.data["kernel"]
     assert kernel["steps"] == 2000 and kernel["messages"] == 1
