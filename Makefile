@@ -37,9 +37,10 @@ docs: $(BIN)/.installed $(MATHJAX)
 lab: $(BIN)/.installed
 	$(BIN)/pendulum-lab
 
+# Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one).
 test: $(BIN)/.installed $(MATHJAX)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest
+	$(BIN)/python tools/run_tests.py
 
 bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/run.py
