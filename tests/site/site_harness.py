@@ -52,6 +52,7 @@ CATEGORIES = (
     "console errors",
     "internal links",
     "dark mode",
+    "code cells",
 )
 
 
@@ -122,6 +123,7 @@ class PageReport:
     math_errors: int = 0
     typeset: int = 0
     error_outputs: list[str] = field(default_factory=list)
+    bare_code: list[str] = field(default_factory=list)
     links: list[str] = field(default_factory=list)
     ids: list[str] = field(default_factory=list)
     animations: list[dict] = field(default_factory=list)
@@ -194,10 +196,14 @@ _INSPECT = """
     transparent: darkMode && img.naturalWidth > 0 ? transparency(img) : 0,
     background: getComputedStyle(img).backgroundColor,
   }));
+  // A notebook cell's code must show as a code block (whitespace kept, highlighted).
+  const bareCode = [...document.querySelectorAll(".cell_input")]
+    .filter((el) => !el.querySelector("pre"))
+    .map((el) => el.textContent.trim().slice(0, 80));
   const ids = [...document.querySelectorAll("[id]")].map((el) => el.id)
     .concat([...document.querySelectorAll("a[name]")].map((el) => el.getAttribute("name")));
   return {
-    rawMath, errors, images, ids,
+    rawMath, errors, images, ids, bareCode,
     typeset: document.querySelectorAll("mjx-container").length,
     mathErrors: document.querySelectorAll("mjx-merror").length,
     links: [...document.querySelectorAll("a[href]")].map((a) => a.href),
@@ -355,6 +361,7 @@ def _visit(context, base: str, page_path: str, mode: str, screenshots, play: boo
         found = page.evaluate(_INSPECT, mode == "dark")
         report.raw_math = found["rawMath"]
         report.error_outputs = found["errors"]
+        report.bare_code = found["bareCode"]
         report.images = found["images"]
         report.ids = found["ids"]
         report.links = found["links"]
@@ -429,6 +436,8 @@ def problems(reports: list[PageReport], html_dir: Path) -> dict[str, list[str]]:
                         f"picture with transparent parts and no light backing "
                         f"({image['background']}): {image['src']}",
                     )  # fmt: skip
+        for text in r.bare_code:
+            add("code cells", r, f"a code cell shown as plain text, not as code: {text!r}")
         for text in r.raw_math:
             add("math", r, f"untypeset mathematics: {text!r}")
         if r.math_errors:

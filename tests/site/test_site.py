@@ -170,7 +170,8 @@ def test_no_launch_link_while_the_repository_is_unset(course_site):
 def test_pages_in_the_browser(course_pages, category):
     """No error output or traceback; every picture loaded and described; mathematics typeset;
     each animation advances when played; no request outside the site and none failing; no
-    console error; every internal link and anchor resolves; readable in dark mode."""
+    console error; every internal link and anchor resolves; readable in dark mode; every code
+    cell shown as a code block."""
     _, found = course_pages
     if found[category]:
         pytest.fail(f"{category}: {_report(found[category])}", pytrace=False)

@@ -109,6 +109,10 @@ def test_a_figure_without_alt_text_fails_the_build_and_an_alt_line_mends_it(tmp_
     assert result.ok, "\n".join(result.warnings())
     page = (site / "_build" / "html" / "lesson.html").read_text(encoding="utf-8")
     assert 'alt="A straight line falling from 1 to 0."' in page
+    # The cell's code is still shown as highlighted code, without its alt line.
+    code = '<div class="highlight"><pre><span></span><span class="c1"># expect: figure</span>'
+    assert code in page
+    assert "# alt:" not in page
 
 
 def test_a_widget_without_a_static_picture_fails_the_build(tmp_path):
@@ -226,6 +230,10 @@ def control_crawl(tmp_path_factory):
                 '# An external script\n\n<script src="https://cdn.example.invalid/x.js"></script>\n'
             ),
             "raw_math.md": "# Untypeset mathematics\n\n<p>$$ E = T + V $$</p>\n",
+            "bare_code.md": (
+                "# A code cell without its code block\n\n"
+                '<div class="cell_input docutils container">x = 1\nprint(x)</div>\n'
+            ),
             "console_error.md": (
                 '# A console error\n\n<script>console.error("control: failure");</script>\n'
             ),
@@ -270,6 +278,7 @@ EXPECTED = {
     "unfound_animation": "animations",
     "autoplay": "animations",
     "transparent": "dark mode",
+    "bare_code": "code cells",
 }
 
 
