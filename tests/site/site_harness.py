@@ -229,6 +229,7 @@ async (seconds) => {
       width: img ? img.naturalWidth : 0,
     };
   }
+  if (players.length + videos.length === 0) return [];
   const start = players.map(shown);
   const startTimes = videos.map((video) => video.currentTime);
   await sleep(seconds * 1000);
