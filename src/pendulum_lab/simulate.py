@@ -24,23 +24,26 @@ import numpy as np
 from . import _validation as check
 from . import codegen
 from .integrators import (
-    CALLS,
     CONFORMAL_METHODS,
     MAX_SWEEPS,
     METHODS,
+    ConvergenceError,
+    HamiltonianField,
+    Method,
+    get_method,
+    suitable_methods,
+    unsuitability,
+)
+from .loops import (
+    CALLS,
     NOT_CONVERGED,
     NOT_FINITE,
     RUNNING,
     STATUS,
     STEPS,
     SWEEPS,
-    ConvergenceError,
-    HamiltonianField,
-    Method,
-    get_method,
-    run,
-    suitable_methods,
-    unsuitability,
+    compiled_loop,
+    new_memory,
 )
 from .model import PendulumModel, driven_pendulum, n_pendulum
 
@@ -153,25 +156,30 @@ def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianF
 
 
 def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_step,
-             save_every, saved_q, saved_p, stats, t0: float = 0.0):
+             save_every, saved_q, saved_p, stats, memory=None, t0: float = 0.0):
     """Run the compiled time loop on rows ``q, p`` of shape ``(K, n)``, in place.
 
     Step ``s`` (counted from 1 over the whole run, ``first_step`` before this
     call) starts at time ``t0 + (s - 1) h``. ``field.params`` and
     ``field.damping_rate`` may hold one row per member (shapes ``(K, P)``,
-    ``(K,)``). Large ensembles are split into one slice per core; the compiled
-    loop releases the GIL, so the slices run in parallel threads.
+    ``(K,)``); ``memory`` (shape ``(K, S)``, :func:`~pendulum_lab.loops.new_memory`)
+    is what the method keeps per member between steps and calls (None: a
+    fresh start, nothing carried over). Large
+    ensembles are split into one slice per core; the compiled loop releases
+    the GIL, so the slices run in parallel threads.
     """
-    loop, step_kernel = run.compiled, method.kernel.compiled  # compile before any threads
+    loop = compiled_loop(field, method)  # compile (or load) before any threads
+    if memory is None:
+        memory = new_memory(method, q.shape[0], q.shape[1])
     params = np.atleast_2d(np.asarray(field.params, dtype=float))
     rates = np.atleast_1d(np.asarray(field.damping_rate, dtype=float))
     per_member = params.shape[0] > 1
 
     def advance(rows):
-        loop(step_kernel, field.hamilton, field.acceleration, field.separable,
-             rates[rows] if per_member else rates, q[rows], p[rows], float(t0), float(h),
-             n_steps, first_step, save_every, params[rows] if per_member else params,
-             saved_q[rows], saved_p[rows], stats[rows])
+        loop(field.separable, rates[rows] if per_member else rates, q[rows], p[rows],
+             float(t0), float(h), n_steps, first_step, save_every,
+             params[rows] if per_member else params, saved_q[rows], saved_p[rows], stats[rows],
+             memory[rows])
 
     members, workers = q.shape[0], os.cpu_count() or 1
     if members < PARALLEL_MIN_MEMBERS or workers == 1:
@@ -341,7 +349,8 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     y = to_method_variables(model, method, q, y, given_momenta=p0 is not None)
     unused = np.empty((q.shape[0], 1, model.n))
     stats = np.zeros((q.shape[0], 4), dtype=np.int64)
-    _advance(method, field, q, y, dt, 1, 0, 2, unused, unused, stats, t0=t0)
+    memory = new_memory(method, q.shape[0], model.n)  # stateless: nothing carried over
+    _advance(method, field, q, y, dt, 1, 0, 2, unused, unused, stats, memory, t0=t0)
     if np.any(stats[:, STATUS] == NOT_CONVERGED):
         raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
                                f"within {MAX_SWEEPS} iterations (dt = {dt:g})")
@@ -479,15 +488,31 @@ def simulate(
         save_every = n_steps
     field = hamiltonian_field(model)
     _check_method_fits(model, method, field)
-
-    n_saved = n_steps // save_every + 1
-    batch_shape = theta0.shape[:-1]
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
     y = to_method_variables(model, method, q, start.reshape(-1, model.n),
                              given_momenta=p0 is not None)
+    return integrate(model, method, field, q, y, theta0.shape[:-1], t_end=t_end, dt=dt,
+                     n_steps=n_steps, save_every=save_every, t0=t0, progress=progress)
+
+
+def integrate(model: PendulumModel, method: Method, field: HamiltonianField, q, y,
+              batch_shape: tuple, *, t_end: float, dt: float, n_steps: int, save_every: int,
+              t0: float, progress, memory=None) -> Trajectory:
+    """The run of :func:`simulate` from validated arguments; ``q``, ``y`` are updated in place.
+
+    ``q`` and ``y`` (shape ``(K, n)``, ``y`` in the method's variables) are the
+    flattened ensemble of shape ``batch_shape``; ``memory`` (shape ``(K, S)``,
+    :func:`~pendulum_lab.loops.new_memory`, updated in place) is what the
+    method carries from step to step; a fresh one by default. Passing the
+    memory of the previous call continues that run exactly
+    (:func:`pendulum_lab.simulate_segments` does).
+    """
+    n_saved = n_steps // save_every + 1
     members = q.shape[0]
     _check_memory(n_saved, members, model.n, t_end, dt, n_steps, save_every)
+    if memory is None:
+        memory = new_memory(method, members, model.n)
     saved_q = np.full((members, n_saved, model.n), np.nan)
     saved_y = np.full((members, n_saved, model.n), np.nan)
     saved_q[:, 0], saved_y[:, 0] = q, y
@@ -501,7 +526,7 @@ def simulate(
         for first in range(0, n_steps, chunk):
             todo = min(chunk, n_steps - first)
             _advance(method, field, q, y, dt, todo, first, save_every, saved_q, saved_y, stats,
-                     t0=t0)
+                     memory, t0=t0)
             if bar is not None:
                 bar.update(todo)
             if np.all(stats[:, STATUS] != RUNNING):
