@@ -77,6 +77,22 @@ class Config:
     flip_t_end: float = 10.0
     limit_members: int = 4000  # item 6: ensemble verified against the C loop
     limit_steps: int = 200
+    per_eval_steps: int = 50000  # item 7: steps of the long run (the short one: a tenth)
+    per_eval_repeats: int = 3
+    per_eval_rounds: int = 3
+    per_eval_before: bool = True  # also measure the package before issue 17 (git archive)
+    floor_dt: float = 0.002  # item 7: energy floor of glrk8 (truncation far below round-off)
+    floor_t_end: float = 1000.0
+    peer_t_end: float = 1000.0  # item 8 (heyoka)
+    peer_long_t_end: float = 1e4
+    peer_grid: float = 0.01
+    peer_requirements: tuple = (1e-8, 1e-11)
+    peer_targets: dict = field(default_factory=lambda: {1e-8: 1.0, 1e-11: 1.5})
+    peer_pilot_dt: float = 0.02
+    heyoka_tol_steps: int = 12  # tolerances tried in half-decades from the requirement down
+    peer_rounds: int = 3
+    pyhamsys_t_end: float = 100.0  # item 9
+    pyhamsys_step: float = 0.01
 
 
 FULL = Config("full")
@@ -98,6 +114,15 @@ QUICK = replace(
     flip_size=40,
     flip_t_end=5.0,
     limit_members=400,
+    per_eval_steps=20000,
+    per_eval_repeats=1,
+    per_eval_rounds=1,
+    per_eval_before=False,
+    floor_t_end=100.0,
+    peer_t_end=100.0,
+    peer_long_t_end=300.0,
+    peer_rounds=1,
+    pyhamsys_t_end=10.0,
 )
 SMOKE = replace(
     FULL,
@@ -124,6 +149,20 @@ SMOKE = replace(
     flip_t_end=1.0,
     limit_members=16,
     limit_steps=10,
+    per_eval_steps=200,
+    per_eval_repeats=1,
+    per_eval_rounds=1,
+    per_eval_before=False,
+    floor_dt=0.01,
+    floor_t_end=1.0,
+    peer_t_end=2.0,
+    peer_long_t_end=4.0,
+    peer_requirements=(1e-6,),
+    peer_pilot_dt=0.05,
+    heyoka_tol_steps=4,
+    peer_rounds=1,
+    pyhamsys_t_end=0.5,
+    pyhamsys_step=0.05,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

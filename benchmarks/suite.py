@@ -34,6 +34,8 @@ from item_c_limit import bench_c_limit
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
 from item_long_run import bench_long_run
+from item_peers import bench_heyoka, bench_pyhamsys
+from item_per_eval import bench_per_eval
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
 
@@ -63,6 +65,9 @@ ITEMS = {
     "report_glrk4": (4, bench_report_glrk4, False),
     "ensemble": (5, bench_ensemble, True),
     "c_limit": (6, bench_c_limit, True),
+    "per_eval": (7, bench_per_eval, True),
+    "heyoka": (8, bench_heyoka, False),
+    "pyhamsys": (9, bench_pyhamsys, False),
 }
 
 
@@ -75,7 +80,9 @@ def resolve(names) -> list[str]:
     for name in names:
         key = by_number.get(str(name), str(name).replace("-", "_"))
         if key not in ITEMS:
-            raise ValueError(f"unknown benchmark {name!r}; choose from {list(ITEMS)} or 1-6")
+            raise ValueError(
+                f"unknown benchmark {name!r}; choose from {list(ITEMS)} or 1-{len(ITEMS)}"
+            )
         keys.append(key)
     return sorted(set(keys), key=lambda k: ITEMS[k][0])
 
