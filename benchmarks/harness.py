@@ -65,7 +65,7 @@ class Config:
     long_pilot_dt: float = 0.01
     long_max_trial_s: float = 60.0  # skip a method whose predicted run is longer
     long_rounds: int = 3
-    long_methods: tuple = ("glrk8", "glrk4", "leapfrog")
+    long_methods: tuple = ("glrk12", "glrk8", "glrk4", "leapfrog")
     long_rtol_start: float = 1e-11  # DOP853 search start (measured earlier: near the answer)
     atol_factor: float = 1e-3  # item 3: solve_ivp atol = rtol * atol_factor
     report_t_end: float = 20.0  # item 4
