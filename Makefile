@@ -1,22 +1,43 @@
 # The two commands of the README:
 #   make lab    create the environment if needed and open JupyterLab on the course
 #   make test   create or update the environment and run the whole test suite
+# and the course website:
+#   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
+# MathJax for the website, served from the site itself (from the npm registry, checked by npm).
+MATHJAX_VERSION := 3.2.2
+MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
-.PHONY: lab test lint bench clean
+.PHONY: lab test lint bench docs mathjax clean
 
 $(BIN)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e ".[lab,test,bench]"
+	$(BIN)/python -m pip install -e ".[lab,test,docs,bench]"
 	touch $@
+
+# The browser build of MathJax (es5/), without the SVG output and the other combined files.
+$(MATHJAX):
+	rm -rf docs/_vendor/mathjax docs/_vendor/package
+	mkdir -p docs/_vendor
+	cd docs/_vendor && npm pack --silent mathjax@$(MATHJAX_VERSION) >/dev/null \
+		&& tar xzf mathjax-$(MATHJAX_VERSION).tgz && rm mathjax-$(MATHJAX_VERSION).tgz
+	mv docs/_vendor/package/es5 docs/_vendor/mathjax && rm -rf docs/_vendor/package
+	cd docs/_vendor/mathjax && rm -rf output/svg output/svg.js latest.js node-main.js \
+		tex-svg*.js tex-chtml*.js tex-mml-svg.js mml-*.js
+	test -f $@
+
+mathjax: $(MATHJAX)
+
+docs: $(BIN)/.installed $(MATHJAX)
+	$(BIN)/python tools/build_site.py
 
 lab: $(BIN)/.installed
 	$(BIN)/pendulum-lab
 
-test: $(BIN)/.installed
+test: $(BIN)/.installed $(MATHJAX)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest
 
@@ -24,4 +45,4 @@ bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/run.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) .pytest_cache docs/_build docs/_vendor docs/reference

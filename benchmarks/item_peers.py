@@ -1,13 +1,13 @@
-"""Items 8 and 9: the strongest peers of issue 17, heyoka and pyhamsys, side by side.
+"""Items 11 and 12: the strongest peers of issue 17, heyoka and pyhamsys, side by side.
 
-Item 8, long accurate runs against heyoka: for each energy requirement
+Item 11, long accurate runs against heyoka: for each energy requirement
 (``cfg.peer_requirements``) at ``T = cfg.peer_t_end``, heyoka's loosest
 tolerance that meets it (tolerances tried in half-decades) against our
 fastest symplectic method at its largest passing step (searched, as item 3
 does); then both at the same settings over ``cfg.peer_long_t_end``, where
 heyoka's energy error drifts and ours does not.
 
-Item 9, against pyhamsys (Tao's extended phase space, its default scheme
+Item 12, against pyhamsys (Tao's extended phase space, its default scheme
 BM4 and projection) at equal energy error: pyhamsys at ``cfg.pyhamsys_step``
 over ``cfg.pyhamsys_t_end``; ours at the largest step whose error is no
 larger. Both optional: a missing peer gives a row that says so.
@@ -99,9 +99,9 @@ def _heyoka_runner(dp, theta0, omega0):
 def bench_heyoka(cfg: Config) -> Section:
     """Long accurate runs: ours (fastest symplectic) against heyoka's cheapest passing tolerance."""
     hy, reason = peers.heyoka_or_reason()
-    title = "8. Long accurate runs vs heyoka"
+    title = "11. Long accurate runs vs heyoka"
     if hy is None:
-        rows = [Row("8", f"T={cfg.peer_t_end:g}, energy <= {r:g}", "-", "heyoka: not installed",
+        rows = [Row("11", f"T={cfg.peer_t_end:g}, energy <= {r:g}", "-", "heyoka: not installed",
                     "-", "-", "not available") for r in cfg.peer_requirements]
         return Section("heyoka", title, rows, [reason], {})
     dp, theta0, omega0, _ = explorer_start()
@@ -134,7 +134,7 @@ def bench_heyoka(cfg: Config) -> Section:
         )
         found = _fastest_ours(cfg, evaluate, requirement, T, OURS, details)
         if chosen is None or not found:
-            rows.append(Row("8", f"T={T:g}, max rel. energy error <= {requirement:g}", "-", "-",
+            rows.append(Row("11", f"T={T:g}, max rel. energy error <= {requirement:g}", "-", "-",
                             "-", "-", "MISS (no passing setting found)"))
             continue
         best = min(found, key=lambda m: found[m]["seconds"])
@@ -156,7 +156,7 @@ def bench_heyoka(cfg: Config) -> Section:
         ratio = t_ours / t_peer
         limit = cfg.peer_targets.get(requirement, 1.0)
         rows.append(Row(
-            "8", f"T={T:g}, max rel. energy error <= {requirement:g}",
+            "11", f"T={T:g}, max rel. energy error <= {requirement:g}",
             f"{best} dt={dt:.4g}: {fmt_time(t_ours)} CPU (err {last['ours']:.2g})",
             f"heyoka tol={tol:.2g} (order {chosen[1]}): {fmt_time(t_peer)} CPU "
             f"(err {last['heyoka']:.2g})",
@@ -164,7 +164,7 @@ def bench_heyoka(cfg: Config) -> Section:
         ))
         for method, v in found.items():
             if method != best:
-                rows.append(Row("8", f"  other method for <= {requirement:g}: {method}",
+                rows.append(Row("11", f"  other method for <= {requirement:g}: {method}",
                                 f"dt={v['dt']:.4g}: {fmt_time(v['seconds'])} (search run)",
                                 "-", f"{v['seconds'] / t_peer:.2f}x", "-", "info"))
         entry = {"method": best, "dt": dt, "heyoka_tol": tol, "ours_cpu": t_ours,
@@ -182,7 +182,7 @@ def bench_heyoka(cfg: Config) -> Section:
         head_ours = float(ours_rel[: ours_rel.size // 10].max())
         head_h = float(heyoka_rel[: heyoka_rel.size // 10].max())
         rows.append(Row(
-            "8", f"T={long_T:g}, same settings (req. {requirement:g} at T={T:g})",
+            "11", f"T={long_T:g}, same settings (req. {requirement:g} at T={T:g})",
             f"{best}: {fmt_time(sample_ours.cpu)}, err first/last tenth "
             f"{head_ours:.2g}/{tail_ours:.2g}",
             f"heyoka: {fmt_time(sample_h.cpu)}, err first/last tenth {head_h:.2g}/{tail_h:.2g}",
@@ -199,9 +199,9 @@ def bench_heyoka(cfg: Config) -> Section:
 def bench_pyhamsys(cfg: Config) -> Section:
     """pyhamsys (Tao's method, default BM4) against ours at equal energy error."""
     module, reason = peers.pyhamsys_or_reason()
-    title = "9. Equal energy error vs pyhamsys"
+    title = "12. Equal energy error vs pyhamsys"
     if module is None:
-        return Section("pyhamsys", title, [Row("9", "pyhamsys at equal energy error", "-",
+        return Section("pyhamsys", title, [Row("12", "pyhamsys at equal energy error", "-",
                                                "pyhamsys: not installed", "-", "-",
                                                "not available")], [reason], {})
     dp, theta0, omega0, p0 = explorer_start()
@@ -229,7 +229,7 @@ def bench_pyhamsys(cfg: Config) -> Section:
     found = _fastest_ours(cfg, evaluate, requirement, T, ("leapfrog", "glrk4", "glrk8"),
                           details)
     if not found:
-        return Section("pyhamsys", title, [Row("9", "pyhamsys at equal energy error", "-", "-",
+        return Section("pyhamsys", title, [Row("12", "pyhamsys at equal energy error", "-", "-",
                                                "-", "-", "MISS (no passing setting)")],
                        details, {})
     best = min(found, key=lambda m: found[m]["seconds"])
@@ -244,7 +244,7 @@ def bench_pyhamsys(cfg: Config) -> Section:
     t_ours, t_peer = med(samples["ours"]), med(samples["pyhamsys"])
     ratio = t_peer / t_ours
     rows = [Row(
-        "9", f"T={T:g}, equal energy error ({requirement:.2g})",
+        "12", f"T={T:g}, equal energy error ({requirement:.2g})",
         f"{best} dt={dt:.4g}: {fmt_time(t_ours)} CPU (err {last['ours']:.2g})",
         f"pyhamsys BM4 step={step:g}: {fmt_time(t_peer)} CPU (err {last['pyhamsys']:.2g})",
         f"{ratio:.0f}x faster", "peer/ours > 1 (CPU)", verdict(ratio, 1.0, at_most=False),

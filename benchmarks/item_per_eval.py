@@ -1,4 +1,4 @@
-"""Item 7: the cost per field evaluation of every method against C, before and after issue 17.
+"""Item 10: the cost per field evaluation of every method against C, before and after issue 17.
 
 Three contenders per round, interleaved: the C RK4 loop (per evaluation:
 its CPU time over four evaluations a step), :mod:`per_eval_probe` on the
@@ -123,7 +123,7 @@ def bench_per_eval(cfg: Config, cloop: c_yardstick.CLoop | None) -> Section:
         data["methods"][method] = {"after": after, "before": before, "ratio": ratio,
                                    "before_ratio": before / c_ns}
         rows.append(Row(
-            "7", f"per evaluation, {method}", f"{after:.0f} ns (before {before:.0f} ns)",
+            "10", f"per evaluation, {method}", f"{after:.0f} ns (before {before:.0f} ns)",
             f"C RK4 {c_ns:.0f} ns", f"{ratio:.2f}x (before {before / c_ns:.2f}x)",
             f"ours/C <= {TARGET:g} (CPU)",
             verdict(ratio, TARGET) if "C" in results else "not available",
@@ -141,7 +141,7 @@ def bench_per_eval(cfg: Config, cloop: c_yardstick.CLoop | None) -> Section:
         after = floors["after"][-1]
         before = floors["before"][-1] if floors["before"] else None
         rows.append(Row(
-            "7", f"energy floor, glrk8 dt={cfg.floor_dt:g} T={cfg.floor_t_end:g} (compensated)",
+            "10", f"energy floor, glrk8 dt={cfg.floor_dt:g} T={cfg.floor_t_end:g} (compensated)",
             f"max rel. error {after['max']:.2g}",
             f"before (plain sum) {before['max']:.2g}" if before else "before: not available",
             f"{before['max'] / after['max']:.1f}x lower" if before else "-",
@@ -157,4 +157,4 @@ def bench_per_eval(cfg: Config, cloop: c_yardstick.CLoop | None) -> Section:
             + (f"; before (plain update) max {before['max']:.3g}, last tenth "
                f"{before['last_tenth']:.3g}." if before else ".")
         )
-    return Section("per_eval", "7. Per field evaluation vs C (before/after)", rows, details, data)
+    return Section("per_eval", "10. Per field evaluation vs C (before/after)", rows, details, data)

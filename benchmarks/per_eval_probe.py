@@ -1,7 +1,7 @@
 """Measure the cost per field evaluation of every method, in a process of its own.
 
 Run as ``python per_eval_probe.py JSON`` with ``JSON`` a dict of settings; it
-prints one JSON line. Item 7 runs it twice side by side, once on the working
+prints one JSON line. Item 10 runs it twice side by side, once on the working
 tree and once on an older revision of the package (``PYTHONPATH`` pointing at
 an exported copy), so "before" and "after" are measured by the same code in
 the same kind of process. Uses only the public API both revisions share

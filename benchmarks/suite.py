@@ -1,6 +1,6 @@
-"""The benchmark suite of issue 7: six items, each a ratio measured side by side.
+"""The benchmark suite (issue 7; items 7, 8, 9 from issues 12, 13, 16), each a ratio side by side.
 
-One file per item (``item_slider.py`` ... ``item_c_limit.py``) and a shared
+One file per item (``item_slider.py`` ... ``item_live.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
 machine's description). This module lists the items and runs them;
 ``benchmarks/run.py`` is the command-line front end; see
@@ -30,14 +30,17 @@ from harness import (
     machine_description,
     verdict,
 )
+from item_bifurcation import bench_bifurcation
 from item_c_limit import bench_c_limit
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
+from item_live import bench_live
 from item_long_run import bench_long_run
 from item_peers import bench_heyoka, bench_pyhamsys
 from item_per_eval import bench_per_eval
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
+from item_variational import bench_variational
 
 __all__ = [
     "COLUMNS",
@@ -65,9 +68,12 @@ ITEMS = {
     "report_glrk4": (4, bench_report_glrk4, False),
     "ensemble": (5, bench_ensemble, True),
     "c_limit": (6, bench_c_limit, True),
-    "per_eval": (7, bench_per_eval, True),
-    "heyoka": (8, bench_heyoka, False),
-    "pyhamsys": (9, bench_pyhamsys, False),
+    "variational": (7, bench_variational, False),
+    "bifurcation": (8, bench_bifurcation, False),
+    "live": (9, bench_live, False),
+    "per_eval": (10, bench_per_eval, True),
+    "heyoka": (11, bench_heyoka, False),
+    "pyhamsys": (12, bench_pyhamsys, False),
 }
 
 

@@ -1,7 +1,10 @@
 """The live simulator and the HTML animation, driven without a browser."""
 
+import re
+
 import numpy as np
 import pytest
+from matplotlib.animation import FuncAnimation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -142,6 +145,13 @@ def test_html_animation_embeds_one_image_per_frame():
     assert animation.count_frames(html.data) == expected
     assert html.data.count("data:image/png;base64,") == expected
     assert "<script" in html.data and "http" not in html.data.split("<script")[1][:200]
+    # Nothing is loaded from outside the page (matplotlib's own player links a CDN stylesheet,
+    # the negative control), so the animation plays offline.
+    external = re.compile(r"""(?:href|src)\s*=\s*["']https?://""")
+    assert not external.search(html.data)
+    figure = Figure()
+    raw = FuncAnimation(figure, lambda k: [], frames=2).to_jshtml()
+    assert external.search(raw)
     faster = animation.html_animation(traj, DP, fps=10, speed=2.0)
     assert animation.count_frames(faster.data) == 11
     with pytest.raises(ValueError, match="more than `max_frames` = 5"):

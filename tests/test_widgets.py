@@ -1,7 +1,11 @@
 """The explorers driven headlessly: set a control, check the recomputed trajectory and figure."""
 
+import base64
+import io
+
 import numpy as np
 import pytest
+from PIL import Image
 
 import pendulum_lab as pl
 from pendulum_lab import analysis, widgets
@@ -64,6 +68,25 @@ def test_angle_slider_recomputes_and_redraws(dp_explorer):
     assert not np.array_equal(line_data(ex), before_line)
     np.testing.assert_allclose(line_data(ex), ex.trajectory.energy)  # total energy line
     assert ex.widget.children[-1].value != before_png
+
+
+def test_set_controls_changes_several_and_recomputes_once(dp_explorer, monkeypatch):
+    ex = dp_explorer
+    computed = []
+    compute = ex.compute
+    monkeypatch.setattr(ex, "compute", lambda: computed.append(1) or compute())
+    assert ex.set_controls({"theta1": 0.4, "theta2": -0.3, "omega1": 1.0})
+    assert len(computed) == 1
+    np.testing.assert_array_equal(ex.trajectory.theta[0], [0.4, -0.3])
+    assert ex.trajectory.omega[0, 0] == pytest.approx(1.0)
+    # Negative control: one control at a time recomputes each time.
+    ex.controls["theta1"].value = 0.1
+    ex.controls["theta2"].value = 0.2
+    assert len(computed) == 3
+    # An unknown name changes nothing.
+    with pytest.raises(ValueError, match="no control named"):
+        ex.set_controls({"theta1": 0.9, "theta9": 1.0})
+    assert ex.controls["theta1"].value == 0.1 and len(computed) == 3
 
 
 def test_velocity_slider_sets_the_initial_velocity(dp_explorer):
@@ -195,6 +218,23 @@ def test_explorer_displays_as_its_widget(dp_explorer):
     assert bundle["application/vnd.jupyter.widget-view+json"]["model_id"] == (
         dp_explorer.widget.model_id
     )
+
+
+def test_display_carries_the_current_figure_as_a_picture(dp_explorer):
+    """Where no kernel runs (the course website), the PNG in the display stands in for the
+    widget: it must be the figure as drawn now, at the figure's size."""
+
+    def picture(explorer):
+        data = base64.b64decode(explorer._repr_mimebundle_()["image/png"])
+        return data, Image.open(io.BytesIO(data))
+
+    before, image = picture(dp_explorer)
+    width, height = dp_explorer.figure.get_size_inches() * dp_explorer.figure.dpi
+    assert image.size == (round(width), round(height))
+    dp_explorer.controls["theta1"].value = 0.3
+    after, _ = picture(dp_explorer)
+    # Negative control: a picture taken once, at creation, would fail here.
+    assert after != before
 
 
 def test_three_link_chain():

@@ -16,11 +16,19 @@ Quick start
 True
 """
 
-from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
+from .family import ModelFamily
+from .integrators import (
+    CONFORMAL_METHODS,
+    METHODS,
+    VARIATIONAL_METHODS,
+    ConvergenceError,
+    Method,
+    get_method,
+)
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
-from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
+from .simulate import Trajectory, hamiltonian_field, henon_step, simulate, step, step_count
 
 __version__ = "0.1.0"
 
@@ -28,7 +36,7 @@ __version__ = "0.1.0"
 # first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
 _LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "discrete_mechanics", "events",
                     "geometric", "mechanics", "plotting", "report", "source", "tables", "timing",
-                    "widgets"}
+                    "warmup", "widgets"}
 
 
 def __getattr__(name):
@@ -36,6 +44,10 @@ def __getattr__(name):
         from .geometric import modified_hamiltonian
 
         return modified_hamiltonian
+    if name == "warm_up":  # reaches every layer's kernels, loaded on use
+        from .warmup import warm_up
+
+        return warm_up
     if name in _LAZY_SUBMODULES:
         import importlib
 
@@ -48,14 +60,17 @@ __all__ = [
     "Chain",
     "ConvergenceError",
     "Method",
+    "ModelFamily",
     "PendulumModel",
     "SegmentedRun",
     "Trajectory",
+    "VARIATIONAL_METHODS",
     "derive_chain",
     "double_pendulum",
     "driven_pendulum",
     "get_method",
     "hamiltonian_field",
+    "henon_step",
     "modified_hamiltonian",
     "n_pendulum",
     "simple_pendulum",
@@ -63,4 +78,5 @@ __all__ = [
     "simulate_segments",
     "step",
     "step_count",
+    "warm_up",
 ]

@@ -2,4 +2,5 @@
 
 from pendulum_lab.cli import main
 
-raise SystemExit(main())
+if __name__ == "__main__":  # importing the module (as the API reference does) runs nothing
+    raise SystemExit(main())

@@ -1,0 +1,520 @@
+"""Sphinx extension for the pendulum_lab course site.
+
+What it adds to Sphinx + MyST-NB + sphinx-book-theme (see docs/README.md for the authors' side):
+
+* **Launch buttons from one setting.** ``course_repository_url`` (conf.py) fills the theme's
+  ``repository_url`` and ``launch_buttons`` and the ``launch`` tag; while it is empty none of
+  them is set, so no launch button and no Binder link is rendered.
+* **Alt text from the cell.** A code cell's leading comment lines may carry ``# alt: text``; the
+  text becomes the ``alt`` of the pictures in that cell's outputs (PNG outputs and ``<img>`` in
+  HTML outputs, such as an embedded animation). A picture anywhere on the site left without alt
+  text is a build warning (an error under ``-W``).
+* **Static pictures instead of live widgets.** An output that is a widget view is shown through
+  the ``image/png`` carried in the same output (conf.py's mime priority), followed by a note that
+  its controls need a live session. A widget output without such a picture is replaced by that
+  note alone and must be listed in ``course_widgets_without_picture``. The widget state that
+  the execution stored is dropped from the page.
+* **Re-execution when the package changes.** The execution cache keys on the notebooks' code
+  only; a fingerprint of ``pendulum_lab``'s source files is kept beside it, and when it changes
+  the cache is emptied and every notebook is read again, so no page shows outputs of older code.
+* **The course map** (directive ``course-map``): the notebooks found in ``notebooks/``, in
+  reading order, each with its title and first sentence.
+* **API pages**: one page per public module of the package, found by walking it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import html
+import importlib.util
+import json
+import pkgutil
+import re
+import shutil
+import time
+from pathlib import Path
+
+from docutils import nodes
+from docutils.parsers.rst import Directive
+from sphinx import addnodes
+from sphinx.util import logging
+
+logger = logging.getLogger(__name__)
+
+WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
+PICTURE_TYPES = ("image/png", "image/jpeg", "image/gif", "image/svg+xml")
+NOTEBOOK_FOLDER = "notebooks"
+FINGERPRINT_FILE = ".package-fingerprint"
+
+_ALT_LINE = re.compile(r"#\s*alt\s*:(.*)$", re.IGNORECASE)
+_CONTINUATION = re.compile(r"#\s{2,}(\S.*)$")
+_IMG_TAG = re.compile(r"<img\b[^>]*>", re.IGNORECASE)
+_ALT_VALUE = re.compile(r"""\balt\s*=\s*("([^"]*)"|'([^']*)'|([^\s>"']+))""", re.IGNORECASE)
+
+
+# ------------------------------------------------------------------------------ alt text
+def _alt_lines(source: str) -> list[tuple[int, bool, str]]:
+    """(line number, starts a text, text) of each ``# alt:`` line and its continuation lines."""
+    found: list[tuple[int, bool, str]] = []
+    continuing = False
+    for number, line in enumerate(source.splitlines()):
+        stripped = line.strip()
+        if not stripped:
+            continuing = False
+            continue
+        if not stripped.startswith("#"):
+            break
+        match = _ALT_LINE.match(stripped)
+        more = _CONTINUATION.match(stripped) if continuing else None
+        if match:
+            found.append((number, True, match.group(1).strip()))
+            continuing = True
+        elif more:
+            found.append((number, False, more.group(1).strip()))
+        else:
+            continuing = False
+    return found
+
+
+def alt_texts(source: str) -> list[str]:
+    """The alt texts announced in the leading comment lines of a code cell.
+
+    ``# alt: text`` starts a text; the comment lines right after it whose text is indented by
+    two or more spaces after the ``#`` continue it. Only the comment block before the first
+    line of code counts (like the ``# expect:`` markers of the browser tests).
+
+    >>> alt_texts("# expect: figure\\n# alt: Energy against time;\\n#   flat.\\nplot()")
+    ['Energy against time; flat.']
+    >>> alt_texts("plot()  # alt: not a leading comment")
+    []
+    """
+    texts: list[str] = []
+    for _, starts, text in _alt_lines(source):
+        if starts:
+            texts.append(text)
+        else:
+            texts[-1] = f"{texts[-1]} {text}"
+    return [text for text in texts if text]
+
+
+def without_alt_lines(source: str) -> str:
+    """The cell's source as the page shows it: the ``# alt:`` lines are in the picture's alt
+    text already.
+
+    >>> without_alt_lines("# expect: figure\\n# alt: A curve;\\n#   rising.\\nplot()")
+    '# expect: figure\\nplot()'
+    """
+    drop = {number for number, _, _ in _alt_lines(source)}
+    return "\n".join(line for k, line in enumerate(source.splitlines()) if k not in drop)
+
+
+def _img_lacks_alt(tag: str) -> bool:
+    match = _ALT_VALUE.search(tag)
+    return match is None or not "".join(g or "" for g in match.groups()[1:]).strip()
+
+
+def html_without_alt(markup: str) -> bool:
+    """Whether an HTML fragment has an ``<img>`` with no or blank alt text.
+
+    >>> html_without_alt('<p><img src="a.png" alt="a curve"></p>')
+    False
+    >>> html_without_alt('<img src="a.png"> <img src="b.png" alt=" ">')
+    True
+    """
+    return any(_img_lacks_alt(tag) for tag in _IMG_TAG.findall(markup))
+
+
+def _is(element: str):
+    return lambda node: isinstance(node, nodes.container) and node.get("nb_element") == element
+
+
+def _pictures(bundle: nodes.Element) -> list[nodes.Element]:
+    """Image nodes and raw HTML nodes with an ``<img>`` inside one output."""
+    found = list(bundle.findall(nodes.image))
+    found += [
+        raw
+        for raw in bundle.findall(nodes.raw)
+        if "html" in raw.get("format", "").split() and _IMG_TAG.search(raw.astext())
+    ]
+    return found
+
+
+def _set_alt(picture: nodes.Element, text: str) -> None:
+    if isinstance(picture, nodes.image):
+        if not picture.get("alt", "").strip():
+            picture["alt"] = text
+        return
+    attribute = f' alt="{html.escape(text, quote=True)}"'
+
+    def with_alt(match: re.Match) -> str:
+        tag = match.group(0)
+        if not _img_lacks_alt(tag):
+            return tag
+        return "<img" + attribute + _ALT_VALUE.sub("", tag[len("<img") :], count=1)
+
+    markup = _IMG_TAG.sub(with_alt, picture.astext())
+    picture.replace_self(nodes.raw("", markup, format=picture["format"]))
+
+
+def _missing_alt(picture: nodes.Element) -> bool:
+    if isinstance(picture, nodes.image):
+        return not picture.get("alt", "").strip()
+    return html_without_alt(picture.astext())
+
+
+def fill_alt_text(app, doctree: nodes.document) -> None:
+    """Give the pictures in each code cell's outputs the cell's ``# alt:`` texts; warn about
+    every picture on the page still without alt text."""
+    for cell in doctree.findall(_is("cell_code")):
+        blocks = list(cell.findall(nodes.literal_block))[:1]
+        texts = alt_texts(blocks[0].astext()) if blocks else []
+        if texts:
+            shown = without_alt_lines(blocks[0].astext())
+            blocks[0].replace_self(blocks[0].copy() + [nodes.Text(shown)])
+        outputs = [
+            bundle
+            for bundle in cell.findall(_is("mime_bundle"))
+            if any(_missing_alt(p) for p in _pictures(bundle))
+        ]
+        if not outputs or not texts:
+            continue
+        if len(texts) != 1 and len(texts) != len(outputs):
+            logger.warning(
+                f"cell {cell.get('cell_index')}: {len(texts)} '# alt:' texts for "
+                f"{len(outputs)} pictures; give one text for all or one per picture",
+                location=cell,
+                type="course",
+                subtype="alt",
+            )
+            continue
+        for k, bundle in enumerate(outputs):
+            for picture in _pictures(bundle):
+                _set_alt(picture, texts[0] if len(texts) == 1 else texts[k])
+
+    for picture in _pictures(doctree):
+        if _missing_alt(picture):
+            cell = next(
+                (a for a in _ancestors(picture) if a.get("nb_element") == "cell_code"), None
+            )
+            where = f"the output of cell {cell.get('cell_index')}" if cell is not None else "page"
+            logger.warning(
+                f"a picture in {where} has no alt text: add a '# alt: what it shows' line at "
+                "the top of the cell (notebooks) or alt text to the image (pages)",
+                location=picture,
+                type="course",
+                subtype="alt",
+            )
+
+
+def _ancestors(node: nodes.Node):
+    while node.parent is not None:
+        node = node.parent
+        if isinstance(node, nodes.Element):
+            yield node
+
+
+# ------------------------------------------------------------------------------ widgets
+def _live_only_note(text: str) -> nodes.paragraph:
+    """A short note that links to the landing page's section on running the course live."""
+    link = addnodes.pending_xref(
+        "",
+        nodes.inline("", "launch the notebook"),
+        refdomain="std",
+        reftype="ref",
+        reftarget="run-live",
+        refexplicit=True,
+        refwarn=True,
+    )
+    return nodes.paragraph(
+        "",
+        "",
+        nodes.Text(text + " To use them, "),
+        link,
+        nodes.Text("."),
+        classes=["course-live-note"],
+    )
+
+
+def _widget_models(app, docname: str) -> tuple[dict, dict]:
+    """The widget models stored by the execution (id -> model), and the notebook's JS files
+    (from which the state is removed: it is not embedded in the page)."""
+    try:
+        from myst_nb.sphinx_ import NbMetadataCollector
+    except ImportError:  # pragma: no cover - MyST-NB is a dependency of the site
+        return {}, {}
+    js_files = NbMetadataCollector.get_doc_data(app.env).get(docname, {}).get("js_files", {})
+    state = js_files.get("ipywidgets_state", (None, {}))[1].get("body", "{}")
+    return json.loads(state).get("state", {}), js_files
+
+
+def _is_progress_bar(model_id: str, models: dict) -> bool:
+    """Whether the widget (or a widget inside it) is a progress bar, such as tqdm's."""
+    todo, seen = [model_id], set()
+    while todo:
+        current = todo.pop()
+        if current in seen or current not in models:
+            continue
+        seen.add(current)
+        model = models[current]
+        if model.get("model_name", "").endswith("ProgressModel"):
+            return True
+        children = model.get("state", {}).get("children", [])
+        todo += [c.removeprefix("IPY_MODEL_") for c in children if isinstance(c, str)]
+    return False
+
+
+def replace_widgets(app, doctree: nodes.document) -> None:
+    """Show widget outputs through their static picture; drop progress bars (a finished page
+    has nothing in progress); count widgets without a picture; drop the widget state."""
+    docname = app.env.docname
+    models, js_files = _widget_models(app, docname)
+    without_picture = 0
+    for bundle in list(doctree.findall(_is("mime_bundle"))):
+        kinds = {child.get("mime_type"): child for child in bundle.children}
+        if WIDGET_VIEW not in kinds:
+            continue
+        view = re.search(r'"model_id"\s*:\s*"([^"]+)"', kinds[WIDGET_VIEW].astext())
+        if view and _is_progress_bar(view.group(1), models):
+            bundle.parent.remove(bundle)
+        elif any(kind in PICTURE_TYPES for kind in kinds):
+            note = _live_only_note(
+                "This picture shows the explorer at its default settings; its controls run "
+                "only in a live session."
+            )
+            bundle.parent.insert(bundle.parent.index(bundle) + 1, note)
+        else:
+            without_picture += 1
+            bundle.replace_self(
+                _live_only_note("An interactive control is here in the live notebook.")
+            )
+    expected = app.config.course_widgets_without_picture.get(docname, 0)
+    if without_picture != expected:
+        logger.warning(
+            f"{without_picture} widget output(s) without a static picture, "
+            f"course_widgets_without_picture expects {expected}: give the widget an image/png "
+            "in its display (see docs/README.md) or update the list in docs/conf.py",
+            location=docname,
+            type="course",
+            subtype="widget",
+        )
+    # Without a kernel the state would only show controls that do nothing: not embedded.
+    for key in [k for k in js_files if k.startswith("ipywidgets")]:
+        del js_files[key]
+
+
+# ------------------------------------------------------------------------------ launch buttons
+def configure_launch(app, config) -> None:
+    """Turn ``course_repository_url`` into the theme's launch settings (or none at all)."""
+    url = config.course_repository_url.strip().rstrip("/")
+    options = dict(config.html_theme_options)
+    for key in ("repository_url", "launch_buttons", "path_to_docs", "repository_branch"):
+        options.pop(key, None)
+    if url:
+        if not re.match(r"https://[^/\s]+/[^/\s]+/[^/\s]+$", url):
+            raise ValueError(
+                "`course_repository_url` must look like https://HOST/OWNER/REPOSITORY, "
+                f"got {config.course_repository_url!r}"
+            )
+        buttons = {"binderhub_url": "https://mybinder.org", "notebook_interface": "jupyterlab"}
+        if config.course_jupyterhub_url.strip():
+            buttons["jupyterhub_url"] = config.course_jupyterhub_url.strip().rstrip("/")
+        options.update(
+            repository_url=url,
+            repository_branch=config.course_repository_branch,
+            path_to_docs="docs",
+            launch_buttons=buttons,
+        )
+        app.tags.add("launch")
+    config.html_theme_options = options
+
+
+# ------------------------------------------------------------------------------ package changes
+def package_fingerprint() -> str:
+    """SHA-256 over the names and contents of the installed ``pendulum_lab`` source files."""
+    spec = importlib.util.find_spec("pendulum_lab")
+    if spec is None or not spec.submodule_search_locations:
+        return "pendulum_lab not importable"
+    digest = hashlib.sha256()
+    for root in spec.submodule_search_locations:
+        for path in sorted(Path(root).rglob("*.py")):
+            digest.update(str(path.relative_to(root)).encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def check_package(app) -> None:
+    """Empty the execution cache when the package's source changed since it was filled."""
+    build_dir = Path(app.outdir).parent
+    cache = Path(app.config.nb_execution_cache_path or build_dir / ".jupyter_cache")
+    stamp = build_dir / FINGERPRINT_FILE
+    current = package_fingerprint()
+    previous = stamp.read_text() if stamp.exists() else None
+    app.env.course_package_changed = previous != current
+    if previous is not None and previous != current:
+        logger.info("pendulum_lab changed since the last build: every notebook runs again")
+        shutil.rmtree(cache, ignore_errors=True)
+    stamp.parent.mkdir(parents=True, exist_ok=True)
+    stamp.write_text(current)
+    app.course_build_started = time.time()
+
+
+def public_modules(package_name: str) -> list[str]:
+    """The package and every module below it whose dotted name has no part starting with
+    ``_``, in walking order (a package before its modules)."""
+    package = importlib.import_module(package_name)
+    found = [package_name]
+    for info in pkgutil.walk_packages(package.__path__, package_name + "."):
+        if not any(part.startswith("_") for part in info.name.split(".")):
+            found.append(info.name)
+    return found
+
+
+def _first_line(module) -> str:
+    doc = (module.__doc__ or "").strip()
+    return doc.splitlines()[0].rstrip(".") if doc else ""
+
+
+def write_api_pages(app) -> None:
+    """One reST page per public module of ``course_api_package`` in ``course_api_folder``.
+
+    A module's page is ``automodule`` with its members (its ``__all__``); a package's page is
+    its docstring and a list of its modules. Written anew on every build, so a removed module
+    leaves no orphan page. The modules are imported by name: ``pendulum_lab.simulate`` is the
+    module even though the package's attribute ``simulate`` is the function (autosummary's
+    lookup takes the attribute, and documented the function instead of the module).
+    """
+    if not app.config.course_api_package:
+        return  # a site without an API reference (the tests' throwaway sites)
+    folder = Path(app.srcdir) / app.config.course_api_folder
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
+    names = public_modules(app.config.course_api_package)
+    for name in names:
+        children = [other for other in names if other.rpartition(".")[0] == name]
+        title = name.replace("_", "\\_")
+        lines = [title, "=" * len(title), "", f".. automodule:: {name}"]
+        if children:
+            lines += ["", ".. rubric:: Modules", ""]
+            for child in children:
+                summary = _first_line(importlib.import_module(child))
+                lines.append(f"* :mod:`{child}`" + (f" -- {summary}" if summary else ""))
+            lines += ["", ".. toctree::", "   :hidden:", ""] + [f"   {c}" for c in children]
+        else:
+            lines += ["   :members:", "   :show-inheritance:"]
+        (folder / f"{name}.rst").write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def write_execution_report(app, exception) -> None:
+    """``execution.json`` beside the HTML folder: per notebook, whether this build ran it or
+    took it from the cache, and its run time (what the build's speed depends on)."""
+    if exception is not None or app.builder.format != "html":
+        return
+    from myst_nb.sphinx_ import NbMetadataCollector
+
+    started = getattr(app, "course_build_started", 0.0)
+    report = {}
+    for docname in sorted(app.env.found_docs):
+        data = NbMetadataCollector.get_doc_data(app.env).get(docname, {}).get("exec_data")
+        if data:
+            report[docname] = {
+                "ran_in_this_build": bool(data.get("mtime") and data["mtime"] >= started),
+                "seconds": data.get("runtime"),
+            }
+    (Path(app.outdir).parent / "execution.json").write_text(json.dumps(report, indent=1) + "\n")
+
+
+def outdated_notebooks(app, env, added, changed, removed):
+    if not getattr(env, "course_package_changed", False):
+        return []
+    return [doc for doc in env.found_docs if env.doc2path(doc).suffix == ".ipynb"]
+
+
+# ------------------------------------------------------------------------------ course map
+def _first_sentence(text: str) -> str:
+    text = " ".join(text.split())
+    match = re.match(r"(.+?[.!?])(\s|$)", text)
+    return match.group(1) if match else text
+
+
+def notebook_summary(path: Path) -> tuple[str, str]:
+    """Title (the first ``# `` heading) and first sentence after it of a notebook."""
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    title, sentence = path.stem, ""
+    for cell in cells:
+        if cell["cell_type"] != "markdown":
+            continue
+        lines = "".join(cell["source"]).splitlines()
+        for k, line in enumerate(lines):
+            if line.startswith("# "):
+                title = line[2:].strip()
+                rest = "\n".join(lines[k + 1 :]).strip().split("\n\n")[0]
+                sentence = _first_sentence(rest)
+                return title, sentence
+    return title, sentence
+
+
+class CourseMap(Directive):
+    """A table of the notebooks in reading order: number, title (linked), first sentence."""
+
+    has_content = False
+
+    def run(self):
+        env = self.state.document.settings.env
+        folder = Path(env.srcdir) / NOTEBOOK_FOLDER
+        table = nodes.table(classes=["course-map"])
+        group = nodes.tgroup(cols=2)
+        table += group
+        group += nodes.colspec(colwidth=8)
+        group += nodes.colspec(colwidth=92)
+        head = nodes.thead()
+        group += head
+        head += self._row(nodes.Text("notebook"), nodes.Text("what it is about"))
+        body = nodes.tbody()
+        group += body
+        for path in sorted(folder.glob("*.ipynb")):
+            env.note_dependency(str(path))
+            title, sentence = notebook_summary(path)
+            link = addnodes.pending_xref(
+                "",
+                nodes.inline("", title),
+                refdomain="std",
+                reftype="doc",
+                reftarget=f"/{NOTEBOOK_FOLDER}/{path.stem}",
+                refexplicit=True,
+                refwarn=True,
+            )
+            number = path.stem.split("_", 1)[0]
+            about = nodes.paragraph("", "", nodes.strong("", "", link))
+            if sentence:
+                # The sentence is Markdown (it may hold $math$): parse it like the page's text.
+                parsed, messages = self.state.inline_text(sentence, self.lineno)
+                about += [nodes.Text(" "), *parsed, *messages]
+            body += self._row(nodes.Text(number), about)
+        return [table]
+
+    @staticmethod
+    def _row(*cells):
+        row = nodes.row()
+        for cell in cells:
+            entry = nodes.entry()
+            entry += cell if isinstance(cell, nodes.paragraph) else nodes.paragraph("", "", cell)
+            row += entry
+        return row
+
+
+def setup(app):
+    app.add_config_value("course_repository_url", "", "html", types=(str,))
+    app.add_config_value("course_jupyterhub_url", "", "html", types=(str,))
+    app.add_config_value("course_repository_branch", "main", "html", types=(str,))
+    app.add_config_value("course_widgets_without_picture", {}, "env", types=(dict,))
+    app.add_config_value("course_api_folder", "reference", "env", types=(str,))
+    app.add_config_value("course_api_package", "pendulum_lab", "env", types=(str,))
+    app.connect("config-inited", configure_launch, priority=100)
+    app.connect("builder-inited", check_package)
+    app.connect("builder-inited", write_api_pages)
+    app.connect("env-get-outdated", outdated_notebooks)
+    app.connect("doctree-read", replace_widgets)
+    app.connect("doctree-read", fill_alt_text)
+    app.connect("build-finished", write_execution_report)
+    app.add_directive("course-map", CourseMap)
+    return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

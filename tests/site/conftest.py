@@ -1,0 +1,54 @@
+"""pytest wiring of the website tests: the ``site`` marker, the skip/fail policy and the session
+fixtures (the course site built once, its pages crawled once). See ``README.md`` beside this file.
+"""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+from site_harness import (
+    ARTIFACTS,
+    SCREENSHOTS,
+    build_site,
+    crawl,
+    in_ci,
+    problems,
+    site_unavailable_reason,
+    summary,
+    write_json,
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    reason = site_unavailable_reason()
+    if reason is None or in_ci():
+        return
+    for item in items:
+        if item.get_closest_marker("site") is not None:
+            item.add_marker(pytest.mark.skip(reason=reason))
+
+
+@pytest.fixture(scope="session")
+def course_site():
+    """The course website, built exactly as ``make docs`` builds it (same folder, same execution
+    cache: notebooks unchanged since the last build are not run again)."""
+    reason = site_unavailable_reason()
+    if reason is not None:
+        pytest.fail(f"{reason} (CI=true: the site tests must run)", pytrace=False)
+    result = build_site.build()
+    write_json(ARTIFACTS / "build.json", build_site.report(result))
+    return result
+
+
+@pytest.fixture(scope="session")
+def course_pages(course_site):
+    """Every page of the course site opened in Chromium in light and dark mode: the records
+    and the problems found, by category. Screenshots go to test-artifacts/site/screenshots/."""
+    if not course_site.ok:
+        pytest.fail("the course site did not build; see test_site_builds", pytrace=False)
+    shutil.rmtree(SCREENSHOTS, ignore_errors=True)
+    reports = crawl(course_site.output, screenshots=SCREENSHOTS)
+    found = problems(reports, course_site.output)
+    write_json(ARTIFACTS / "pages.json", {**summary(reports), "problems": found})
+    return reports, found

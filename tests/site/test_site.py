@@ -1,0 +1,132 @@
+"""The course website as a reader gets it: built with warnings as errors, every page opened in
+Chromium from a local server, in light and dark mode.
+
+The negative controls that show each check can fail are in ``test_site_controls.py``.
+"""
+
+from __future__ import annotations
+
+import html
+import importlib
+import inspect
+import pkgutil
+import re
+
+import pytest
+from site_harness import CATEGORIES, MODES, REPO_ROOT, SCREENSHOTS, list_pages
+
+import pendulum_lab
+
+pytestmark = pytest.mark.site
+
+NOTEBOOKS = sorted((REPO_ROOT / "notebooks").glob("*.ipynb"))
+
+
+def _report(found: list[str], limit: int = 25) -> str:
+    shown = "\n  ".join(found[:limit])
+    more = f"\n  ... and {len(found) - limit} more" if len(found) > limit else ""
+    return f"{len(found)} problem(s):\n  {shown}{more}"
+
+
+# ---------------------------------------------------------------------------------------------
+# The build
+# ---------------------------------------------------------------------------------------------
+def test_site_builds_with_warnings_as_errors(course_site):
+    if not course_site.ok:
+        pytest.fail(
+            "make docs failed (warnings are errors):\n" + "\n".join(course_site.warnings()[:40]),
+            pytrace=False,
+        )
+
+
+def test_every_notebook_is_a_page_in_reading_order(course_site):
+    html = course_site.output
+    assert NOTEBOOKS, "no notebooks found"
+    for notebook in NOTEBOOKS:
+        assert (html / "notebooks" / f"{notebook.stem}.html").is_file(), notebook.name
+        # The download button offers the notebook as it is in the repository.
+        download = html / "_sources" / "notebooks" / notebook.name
+        assert download.read_bytes() == notebook.read_bytes(), notebook.name
+    # The navigation lists the notebooks in the order of their numbers.
+    index = (html / "index.html").read_text(encoding="utf-8")
+    order = re.findall(r'href="notebooks/([^"#]+)\.html"', index)
+    listed = list(dict.fromkeys(order))
+    assert listed == [n.stem for n in NOTEBOOKS]
+
+
+def test_every_notebook_page_offers_the_ipynb_download(course_site):
+    for notebook in NOTEBOOKS:
+        page = (course_site.output / "notebooks" / f"{notebook.stem}.html").read_text("utf-8")
+        assert f'href="../_sources/notebooks/{notebook.name}"' in page, notebook.name
+
+
+def _documented_members(module):
+    """Public objects a module's API page documents: its ``__all__``, else what it defines."""
+    names = getattr(module, "__all__", None)
+    if names is None:
+        names = [
+            name
+            for name, obj in vars(module).items()
+            if not name.startswith("_") and getattr(obj, "__module__", None) == module.__name__
+        ]
+    return [getattr(module, name) for name in names]
+
+
+def test_api_pages_cover_every_public_module_and_show_the_examples(course_site):
+    modules = ["pendulum_lab"] + [
+        info.name
+        for info in pkgutil.walk_packages(pendulum_lab.__path__, "pendulum_lab.")
+        if not any(part.startswith("_") for part in info.name.split("."))
+    ]
+    examples = 0
+    for name in modules:
+        page = course_site.output / "reference" / f"{name}.html"
+        assert page.is_file(), f"no API page for {name}"
+        text = html.unescape(re.sub(r"<[^>]+>", "", page.read_text(encoding="utf-8")))
+        module = importlib.import_module(name)
+        if hasattr(module, "__path__"):
+            continue  # a package's page lists its modules; their pages show the members
+        for obj in _documented_members(module):
+            doc = inspect.getdoc(obj) or ""
+            first = next((line for line in doc.splitlines() if line.startswith(">>> ")), None)
+            if "Examples\n--------" in doc and first:
+                examples += 1
+                assert first in text, f"{name}: the example {first!r} is not on its page"
+    assert examples > 0, "no docstring example found: the check would pass vacuously"
+
+
+def test_no_launch_link_while_the_repository_is_unset(course_site):
+    # docs/conf.py leaves course_repository_url empty until the course has a public address.
+    for page in list_pages(course_site.output):
+        text = (course_site.output / page).read_text(encoding="utf-8")
+        assert "mybinder.org" not in text and "launch-buttons" not in text, page
+
+
+# ---------------------------------------------------------------------------------------------
+# Every page in the browser
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("category", CATEGORIES)
+def test_pages_in_the_browser(course_pages, category):
+    """No error output or traceback; every picture loaded and described; mathematics typeset;
+    each animation advances when played; no request outside the site and none failing; no
+    console error; every internal link and anchor resolves; readable in dark mode."""
+    _, found = course_pages
+    if found[category]:
+        pytest.fail(f"{category}: {_report(found[category])}", pytrace=False)
+
+
+def test_the_checks_saw_what_they_check(course_pages, course_site):
+    reports, _ = course_pages
+    light = [r for r in reports if r.mode == MODES[0]]
+    assert {r.page for r in light} == set(list_pages(course_site.output))
+    assert sum(len(r.images) for r in light) >= len(NOTEBOOKS), "too few pictures seen"
+    assert sum(r.typeset for r in light) > 0, "no typeset mathematics seen"
+    assert sum(len(r.animations) for r in light) >= 1, "no embedded animation was played"
+    assert sum(len(r.links) for r in light) > 0
+
+
+def test_screenshots_of_every_page_in_both_modes(course_pages, course_site):
+    for mode in MODES:
+        for page in list_pages(course_site.output):
+            shot = SCREENSHOTS / mode / (page.removesuffix(".html").replace("/", "__") + ".png")
+            assert shot.is_file() and shot.stat().st_size > 0, shot

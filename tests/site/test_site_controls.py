@@ -1,0 +1,290 @@
+"""Negative controls for the website tests: small throwaway sites, built with the course's own
+configuration (docs/conf.py and its extension), each with one defect that a check must catch.
+
+* At build time (warnings are errors): a notebook cell that raises, a figure without alt text, a
+  widget without a static picture, a broken cross-reference.
+* In the browser: a traceback shown on a page, a broken internal link and anchor, a picture
+  without alt text, an external script, untypeset mathematics, a console error, an animation
+  that does not advance, a transparent picture on the dark page. A clean page in the same site
+  must show no problem at all (the positive control).
+* Launch buttons: present, with the right address, once ``course_repository_url`` is set.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import re
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from site_harness import CATEGORIES, REPO_ROOT, build_site, crawl, problems
+
+pytestmark = pytest.mark.site
+
+sys.path.insert(0, str(REPO_ROOT / "docs" / "_ext"))
+
+
+class Markdown(str):
+    """The source of a Markdown cell (any other string is a code cell)."""
+
+
+def notebook(*cells: str) -> str:
+    """A notebook (JSON) with these cells, Python 3 kernel, no outputs."""
+    made = []
+    for source in cells:
+        kind = "markdown" if isinstance(source, Markdown) else "code"
+        cell = {"cell_type": kind, "id": f"c{len(made)}", "metadata": {}, "source": source}
+        if kind == "code":
+            cell.update(outputs=[], execution_count=None)
+        made.append(cell)
+    return json.dumps(
+        {
+            "cells": made,
+            "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3"}},
+            "nbformat": 4,
+            "nbformat_minor": 5,
+        }
+    )
+
+
+def make_site(folder: Path, files: dict[str, str]) -> Path:
+    for name, text in files.items():
+        path = folder / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return folder
+
+
+def build(folder: Path, overrides: dict | None = None, **kwargs):
+    """Build a throwaway site with the course configuration, without the API reference."""
+    overrides = {"course_api_package": "", **(overrides or {})}
+    return build_site.build(
+        source=folder, output=folder / "_build" / "html", jobs=1, overrides=overrides, **kwargs
+    )
+
+
+INDEX = """\
+# Control site
+
+```{toctree}
+:glob:
+
+*
+```
+"""
+
+FIGURE = "import matplotlib.pyplot as plt\nplt.plot([0, 1], [1, 0]);"
+
+
+# ---------------------------------------------------------------------------------------------
+# Build-time controls
+# ---------------------------------------------------------------------------------------------
+def test_a_cell_that_raises_fails_the_build(tmp_path):
+    site = make_site(
+        tmp_path,
+        {
+            "index.md": INDEX,
+            "lesson.ipynb": notebook(Markdown("# Lesson"), "raise RuntimeError('boom')"),
+        },
+    )
+    result = build(site)
+    assert not result.ok
+    assert "RuntimeError" in result.log and "boom" in result.log
+
+
+def test_a_figure_without_alt_text_fails_the_build_and_an_alt_line_mends_it(tmp_path):
+    site = make_site(
+        tmp_path, {"index.md": INDEX, "lesson.ipynb": notebook(Markdown("# Lesson"), FIGURE)}
+    )
+    result = build(site)
+    assert not result.ok
+    assert "has no alt text" in result.log
+    described = "# expect: figure\n# alt: A straight line falling from 1 to 0.\n" + FIGURE
+    (site / "lesson.ipynb").write_text(notebook(Markdown("# Lesson"), described))
+    result = build(site)
+    assert result.ok, "\n".join(result.warnings())
+    page = (site / "_build" / "html" / "lesson.html").read_text(encoding="utf-8")
+    assert 'alt="A straight line falling from 1 to 0."' in page
+
+
+def test_a_widget_without_a_static_picture_fails_the_build(tmp_path):
+    site = make_site(
+        tmp_path,
+        {
+            "index.md": INDEX,
+            "lesson.ipynb": notebook(
+                Markdown("# Lesson"), "import ipywidgets\nipywidgets.IntSlider()"
+            ),
+        },
+    )
+    result = build(site)
+    assert not result.ok
+    assert "without a static picture" in result.log
+
+
+def test_a_broken_cross_reference_fails_the_build(tmp_path):
+    site = make_site(
+        tmp_path, {"index.md": INDEX, "page.md": "# Page\n\nSee [the lesson](missing.md).\n"}
+    )
+    result = build(site)
+    assert not result.ok
+    assert "missing" in result.log
+
+
+# ---------------------------------------------------------------------------------------------
+# Browser controls
+# ---------------------------------------------------------------------------------------------
+def _transparent_png() -> str:
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    image = Image.new("RGBA", (40, 20), (0, 0, 0, 0))
+    image.paste((0, 0, 0, 255), (0, 9, 40, 11))  # a black line on nothing
+    image.save(buffer, format="PNG")
+    return base64.b64encode(buffer.getvalue()).decode()
+
+
+def _frozen_animation() -> str:
+    """matplotlib's JavaScript player with three identical frames: it can never advance."""
+    from matplotlib.animation import FuncAnimation
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(2, 1), dpi=40)
+    html = FuncAnimation(figure, lambda k: [], frames=3).to_jshtml(default_mode="loop")
+    html = re.sub(r"<link[^>]*https?://[^>]*>", "", html)  # the external-request control is apart
+    return html.replace("<img ", '<img alt="A frozen animation" ', 1)
+
+
+@pytest.fixture(scope="module")
+def control_site(tmp_path_factory):
+    """A site whose pages each carry one defect, and one clean page; built without -W so that
+    the defective pages exist, then opened in the browser in both modes."""
+    folder = tmp_path_factory.mktemp("control_site")
+    make_site(
+        folder,
+        {
+            "index.md": INDEX,
+            "clean.md": """\
+                # A clean page
+
+                A formula, $E = T + V$, a [link to the index](index.md), and a picture:
+
+                ![The course's pendulum icon](_static/favicon.svg)
+                """,
+            "traceback.ipynb": notebook(Markdown("# A cell that raises"), "1 / 0"),
+            "broken_link.md": """\
+                # Broken links
+
+                <a href="missing.html">a page that does not exist</a>,
+                <a href="index.html#no-such-anchor">an anchor that does not exist</a>
+                """,
+            "no_alt.md": '# No alt text\n\n<img src="_static/favicon.svg">\n',
+            "external_script.md": (
+                '# An external script\n\n<script src="https://cdn.example.invalid/x.js"></script>\n'
+            ),
+            "raw_math.md": "# Untypeset mathematics\n\n<p>$$ E = T + V $$</p>\n",
+            "console_error.md": (
+                '# A console error\n\n<script>console.error("control: failure");</script>\n'
+            ),
+            "frozen_animation.md": "# A frozen animation\n\n" + _frozen_animation() + "\n",
+            "transparent.md": (
+                "# A transparent picture\n\n"
+                f'<img alt="A black line" src="data:image/png;base64,{_transparent_png()}" '
+                'style="background-color: transparent !important">\n'
+            ),
+        },
+    )
+    result = build(
+        folder,
+        warnings_are_errors=False,
+        overrides={"nb_execution_allow_errors": "1", "suppress_warnings": "course.alt"},
+    )
+    html = folder / "_build" / "html"
+    assert (html / "clean.html").is_file(), result.log[-3000:]
+    reports = crawl(html)
+    return problems(reports, html)
+
+
+EXPECTED = {
+    "traceback": "error output",
+    "broken_link": "internal links",
+    "no_alt": "alt text",
+    "external_script": "external requests",
+    "raw_math": "math",
+    "console_error": "console errors",
+    "frozen_animation": "animations",
+    "transparent": "dark mode",
+}
+
+
+@pytest.mark.parametrize("page", sorted(EXPECTED))
+def test_each_defect_is_caught(control_site, page):
+    category = EXPECTED[page]
+    assert any(p.startswith(f"{page}.html ") for p in control_site[category]), (
+        f"the {category!r} check missed the defect on {page}.html: {control_site[category]}"
+    )
+
+
+def test_the_clean_page_shows_no_problem(control_site):
+    found = [p for category in CATEGORIES for p in control_site[category]]
+    assert not [p for p in found if p.startswith("clean.html ")], found
+
+
+def test_both_broken_links_are_caught(control_site):
+    broken = [p for p in control_site["internal links"] if p.startswith("broken_link.html ")]
+    assert any("missing.html" in p for p in broken)
+    assert any("#no-such-anchor" in p for p in broken)
+
+
+# ---------------------------------------------------------------------------------------------
+# Launch buttons
+# ---------------------------------------------------------------------------------------------
+def test_launch_buttons_appear_once_the_repository_is_set(tmp_path):
+    site = make_site(tmp_path, {"index.md": INDEX, "lesson.ipynb": notebook(Markdown("# Lesson"))})
+    repository = "https://github.com/someone/pendulum_lab"
+    result = build(
+        site, overrides={"course_repository_url": repository, "nb_execution_mode": "off"}
+    )
+    assert result.ok, "\n".join(result.warnings())
+    page = (site / "_build" / "html" / "lesson.html").read_text(encoding="utf-8")
+    binder = (
+        "https://mybinder.org/v2/gh/someone/pendulum_lab/main?urlpath=lab/tree/docs/lesson.ipynb"
+    )
+    assert binder in page
+    # In the course the page docs/notebooks/NAME.ipynb is the notebook itself (a symbolic link
+    # to notebooks/), so the launched path exists in the repository.
+    assert (REPO_ROOT / "docs" / "notebooks").resolve() == (REPO_ROOT / "notebooks").resolve()
+
+
+def test_a_repository_address_that_is_not_one_is_refused(tmp_path):
+    site = make_site(tmp_path, {"index.md": INDEX})
+    result = build(site, overrides={"course_repository_url": "github.com/someone"})
+    assert not result.ok
+    assert "course_repository_url" in result.log
+
+
+# ---------------------------------------------------------------------------------------------
+# The extension's parsing, without a build
+# ---------------------------------------------------------------------------------------------
+def test_alt_lines_are_read_from_the_leading_comments_only():
+    from course_site import alt_texts, html_without_alt, without_alt_lines
+
+    source = (
+        "# NBVAL_IGNORE_OUTPUT\n# expect: figure\n# alt: Energy against time;\n"
+        "#   the total is flat.\n# alt: A second picture.\nplot()\n# alt: too late\n"
+    )
+    assert alt_texts(source) == ["Energy against time; the total is flat.", "A second picture."]
+    assert alt_texts("plot()  # alt: not leading") == []
+    assert alt_texts("# alt:   \nplot()") == []  # an empty text is no text
+    # The page shows the code without the alt lines (their text is in the picture's alt).
+    assert (
+        without_alt_lines(source)
+        == "# NBVAL_IGNORE_OUTPUT\n# expect: figure\nplot()\n# alt: too late"
+    )
+    assert html_without_alt('<img src="a.png">')
+    assert html_without_alt('<img src="a.png" alt="">')
+    assert not html_without_alt('<img alt="a curve" src="a.png">')

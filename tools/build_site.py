@@ -1,0 +1,153 @@
+"""Build the course website (``make docs``): Sphinx + MyST-NB into ``docs/_build/html``.
+
+Every build reads all pages afresh (``-E``) with warnings as errors (``-W --keep-going``), so a
+warning is reported on every build, not only on the build after the page changed; the notebooks'
+execution cache (``docs/_build/.jupyter_cache``) is what keeps a rebuild fast: a notebook whose
+code did not change, under an unchanged package, is not run again.
+
+Usage::
+
+    .venv/bin/python tools/build_site.py                  # the site, into docs/_build/html
+    .venv/bin/python tools/build_site.py -D course_repository_url=https://github.com/OWNER/REPO
+
+The site tests import :func:`build` and build throwaway sites with the same configuration.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+DOCS = REPO_ROOT / "docs"
+OUTPUT = DOCS / "_build" / "html"
+MATHJAX = DOCS / "_vendor" / "mathjax" / "tex-mml-chtml.js"
+MATHJAX_HINT = "make mathjax (make docs and make test do it)"
+
+
+@dataclass
+class BuildResult:
+    returncode: int
+    seconds: float
+    log: str
+    output: Path
+
+    @property
+    def ok(self) -> bool:
+        return self.returncode == 0
+
+    def warnings(self) -> list[str]:
+        return [line for line in self.log.splitlines() if "WARNING:" in line or "ERROR:" in line]
+
+
+def missing_mathjax() -> str | None:
+    """Why the site cannot be built here, or None."""
+    if not MATHJAX.exists():
+        return f"the local MathJax copy {MATHJAX.relative_to(REPO_ROOT)} is missing: {MATHJAX_HINT}"
+    return None
+
+
+def build(
+    source: Path = DOCS,
+    output: Path = OUTPUT,
+    overrides: dict[str, str] | None = None,
+    jobs: int = 2,
+    warnings_are_errors: bool = True,
+) -> BuildResult:
+    """Build the HTML site of ``source`` with the course configuration (``docs/conf.py``).
+
+    Parameters
+    ----------
+    source : Path
+        Folder of the pages (``docs/`` for the course; a throwaway folder in the tests).
+    output : Path
+        Where the HTML goes; the execution cache goes next to it (``output/../.jupyter_cache``).
+    overrides : dict of str -> str, optional
+        Configuration values for this build (``sphinx-build -D name=value``).
+    jobs : int
+        Parallel processes for reading (notebooks run in parallel, one kernel each).
+    warnings_are_errors : bool
+        ``-W --keep-going`` (the default, as ``make docs``); False only for the tests'
+        negative controls, which need the pages of a site that has problems.
+
+    Returns
+    -------
+    BuildResult
+        Exit code, wall time in seconds, the combined log and the output folder.
+    """
+    reason = missing_mathjax()
+    if reason:
+        raise FileNotFoundError(reason)
+    command = [
+        sys.executable, "-m", "sphinx",
+        "-b", "html", "-E", "-q", "-j", str(jobs),
+        *(["-W", "--keep-going"] if warnings_are_errors else []),
+        "-c", str(DOCS),
+        str(source), str(output),
+    ]  # fmt: skip
+    for name, value in (overrides or {}).items():
+        command += ["-D", f"{name}={value}"]
+    # The kernels' "running over TCP without encryption" notice is noise in a local build.
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    start = time.perf_counter()
+    completed = subprocess.run(
+        command, cwd=REPO_ROOT, env=env, capture_output=True, text=True, check=False
+    )
+    seconds = time.perf_counter() - start
+    log = completed.stdout + completed.stderr
+    return BuildResult(completed.returncode, seconds, log, output)
+
+
+def report(result: BuildResult) -> dict:
+    """Wall time, exit code, and which notebooks this build ran or took from the cache."""
+    execution = result.output.parent / "execution.json"
+    notebooks = json.loads(execution.read_text()) if execution.exists() else {}
+    ran = sorted(name for name, row in notebooks.items() if row["ran_in_this_build"])
+    return {
+        "seconds": round(result.seconds, 1),
+        "returncode": result.returncode,
+        "notebooks": len(notebooks),
+        "notebooks_run": ran,
+        "notebook_seconds_run": round(sum(notebooks[n]["seconds"] or 0 for n in ran), 1),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument(
+        "-D",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a configuration value for this build",
+    )
+    parser.add_argument("-j", dest="jobs", type=int, default=2, help="parallel readers (2)")
+    args = parser.parse_args(argv)
+    overrides = dict(item.split("=", 1) for item in args.overrides)
+    try:
+        result = build(overrides=overrides, jobs=args.jobs)
+    except FileNotFoundError as err:
+        print(f"build_site: {err}", file=sys.stderr)
+        return 2
+    shown = [line for line in result.log.splitlines() if "IPKernelApp" not in line]
+    print("\n".join(shown))
+    facts = report(result)
+    (OUTPUT.parent / "build.json").write_text(json.dumps(facts, indent=1) + "\n")
+    verdict = "built" if result.ok else "FAILED (warnings are errors)"
+    print(
+        f"site {verdict} in {result.seconds:.1f} s ({len(facts['notebooks_run'])} of "
+        f"{facts['notebooks']} notebooks run, the others from the cache): "
+        f"{result.output.relative_to(REPO_ROOT)}"
+    )
+    return result.returncode
+
+
+if __name__ == "__main__":
+    sys.exit(main())
