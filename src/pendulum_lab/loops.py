@@ -23,6 +23,7 @@ from __future__ import annotations
 import functools
 import math
 import re
+import sys
 
 import numpy as np
 
@@ -176,8 +177,13 @@ def run(separable, damping_rates, q, p, t0, h, n_steps, first_step, save_every, 
 
 
 def _where(kernel) -> tuple[str, str]:
-    """The module and the name a compiled kernel is imported by."""
-    return kernel.py_func.__module__, kernel.py_func.__name__
+    """The module and the name a compiled kernel is imported by (the generated loop imports it)."""
+    module, name = kernel.py_func.__module__, kernel.py_func.__name__
+    if getattr(sys.modules.get(module), name, None) is not kernel:
+        raise TypeError(f"the kernel {module}.{name} cannot be imported by that name: a kernel "
+                        "must be a module-level function of a module (generate it with "
+                        "codegen.load_generated), not a closure")
+    return module, name
 
 
 def loop_source(method: Method, first, second, n: int) -> str:
