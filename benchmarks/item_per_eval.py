@@ -35,7 +35,7 @@ def _export(revision: str, folder: Path) -> Path | None:
     archive = folder / "src.tar"
     try:
         with archive.open("wb") as out:
-            done = subprocess.run(["git", "-C", str(HERE), "archive", revision, "src"],
+            done = subprocess.run(["git", "-C", str(HERE.parent), "archive", revision, "src"],
                                   stdout=out, stderr=subprocess.PIPE, check=False, timeout=60)
     except (OSError, subprocess.TimeoutExpired):
         return None

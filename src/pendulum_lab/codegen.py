@@ -57,6 +57,7 @@ __all__ = [
     "load_discrete_kernels",
     "load_generated",
     "load_kernels",
+    "paired_trig",
     "parameters_array",
     "sincos",
     "solve_spd",
@@ -153,29 +154,39 @@ def _plain_symbols(chain: Chain):
     return th, w, pars, mapping
 
 
-def _paired_trig(exprs: list[sp.Expr], mapping: dict) -> tuple[list[str], dict]:
-    """Lines computing ``sin(x)`` and ``cos(x)`` together where ``exprs`` need both.
+def paired_trig(exprs: list[sp.Expr], mapping: dict) -> tuple[list[tuple], dict]:
+    """The angles whose sine and cosine ``exprs`` both need, to compute them together.
 
-    Returns the lines ``sin0, cos0 = sincos(x)`` (see :func:`sincos`) and the
-    substitution ``{sin(x): sin0, cos(x): cos0}`` for the expressions.
+    Returns ``pairs``, a list of ``(sine, cosine, angle)`` (new symbols
+    ``sin0``, ``cos0``, ... and the angle, after ``mapping``), and the
+    substitution ``{sin(angle): sine, cos(angle): cosine}`` for the
+    expressions. The kernels compute each pair with :func:`sincos`; the C
+    yardstick of the benchmarks with C's ``sincos``, so that both do the same
+    arithmetic.
     """
     kinds: dict = {}
     for expr in exprs:
         for call in sp.sympify(expr).xreplace(mapping).atoms(sp.sin, sp.cos):
             kinds.setdefault(call.args[0], set()).add(call.func)
-    lines, substitution = [], {}
+    pairs, substitution = [], {}
     for k, angle in enumerate(sorted((x for x, f in kinds.items() if len(f) == 2), key=str)):
         sine, cosine = sp.Symbol(f"sin{k}", real=True), sp.Symbol(f"cos{k}", real=True)
-        lines.append(f"{sine}, {cosine} = sincos({sp.pycode(angle)})")
+        pairs.append((sine, cosine, angle))
         substitution |= {sp.sin(angle): sine, sp.cos(angle): cosine}
-    return lines, substitution
+    return pairs, substitution
+
+
+def _trig_lines(exprs: list[sp.Expr], mapping: dict) -> tuple[list[str], dict]:
+    """:func:`paired_trig` as kernel lines ``sin0, cos0 = sincos(angle)``, and the substitution."""
+    pairs, substitution = paired_trig(exprs, mapping)
+    return [f"{s}, {c} = sincos({sp.pycode(angle)})" for s, c, angle in pairs], substitution
 
 
 def _assignments(targets: list[str], exprs: list[sp.Expr], mapping: dict, prefix: str,
                  trig: dict | None = None) -> list[str]:
     """Lines ``target = expression`` with common subexpressions shared (``cse``).
 
-    ``trig`` replaces sines and cosines computed beforehand (:func:`_paired_trig`).
+    ``trig`` replaces sines and cosines computed beforehand (:func:`paired_trig`).
     """
     exprs = [sp.sympify(e).xreplace(mapping).xreplace(trig or {}) for e in exprs]
     temps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols(prefix))
@@ -223,14 +234,14 @@ def kernel_source(chain: Chain) -> str:
     if chain.forced:
         momentum_rates = momentum_rates + chain.generalized_forces
     mass = list(chain.mass_matrix)
-    trig_lines, trig = _paired_trig(mass + list(momentum_rates), mapping)
+    trig_lines, trig = _trig_lines(mass + list(momentum_rates), mapping)
     hamilton = unpack + trig_lines
     hamilton += _solve_lines(chain, mapping, [f"p[{i}]" for i in range(n)], "p", "dq", "a",
                              trig)
     hamilton += [f"w{i} = dq[{i}]" for i in range(n)]
     hamilton += _assignments([f"dp[{i}]" for i in range(n)], list(momentum_rates), mapping, "b",
                              trig)
-    trig_lines, trig = _paired_trig(mass + list(chain.forcing), mapping)
+    trig_lines, trig = _trig_lines(mass + list(chain.forcing), mapping)
     accel = unpack + trig_lines + [f"w{i} = v[{i}]" for i in range(n)]
     forcing = [f"f{i}" for i in range(n)] if n <= 2 else [f"rhs[{i}]" for i in range(n)]
     if n > 2:
