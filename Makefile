@@ -15,7 +15,7 @@ MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 $(BIN)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e ".[lab,test,docs]"
+	$(BIN)/python -m pip install -e ".[lab,test,docs,bench]"
 	touch $@
 
 # The browser build of MathJax (es5/), without the SVG output and the other combined files.

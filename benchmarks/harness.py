@@ -65,7 +65,7 @@ class Config:
     long_pilot_dt: float = 0.01
     long_max_trial_s: float = 60.0  # skip a method whose predicted run is longer
     long_rounds: int = 3
-    long_methods: tuple = ("glrk8", "glrk4", "leapfrog")
+    long_methods: tuple = ("glrk12", "glrk8", "glrk4", "leapfrog")
     long_rtol_start: float = 1e-11  # DOP853 search start (measured earlier: near the answer)
     atol_factor: float = 1e-3  # item 3: solve_ivp atol = rtol * atol_factor
     report_t_end: float = 20.0  # item 4
@@ -87,6 +87,22 @@ class Config:
     bif_c_members: int = 20  # members the C loop runs for its time per step
     live_rounds: int = 15  # item 9: interleaved update/recompute rounds in the kernel
     live_browser_seconds: float = 5.0  # item 9: play time counted in Chromium (0: not run)
+    per_eval_steps: int = 50000  # item 10: steps of the long run (the short one: a tenth)
+    per_eval_repeats: int = 3
+    per_eval_rounds: int = 3
+    per_eval_before: bool = True  # also measure the package before issue 17 (git archive)
+    floor_dt: float = 0.002  # item 10: energy floor of glrk8 (truncation far below round-off)
+    floor_t_end: float = 1000.0
+    peer_t_end: float = 1000.0  # item 11 (heyoka)
+    peer_long_t_end: float = 1e4
+    peer_grid: float = 0.01
+    peer_requirements: tuple = (1e-8, 1e-11)
+    peer_targets: dict = field(default_factory=lambda: {1e-8: 1.0, 1e-11: 1.5})
+    peer_pilot_dt: float = 0.02
+    heyoka_tol_steps: int = 12  # tolerances tried in half-decades from the requirement down
+    peer_rounds: int = 3
+    pyhamsys_t_end: float = 100.0  # item 12
+    pyhamsys_step: float = 0.01
 
 
 FULL = Config("full")
@@ -116,6 +132,15 @@ QUICK = replace(
     bif_c_members=10,
     live_rounds=4,
     live_browser_seconds=2.0,
+    per_eval_steps=20000,
+    per_eval_repeats=1,
+    per_eval_rounds=1,
+    per_eval_before=False,
+    floor_t_end=100.0,
+    peer_t_end=100.0,
+    peer_long_t_end=300.0,
+    peer_rounds=1,
+    pyhamsys_t_end=10.0,
 )
 SMOKE = replace(
     FULL,
@@ -152,6 +177,20 @@ SMOKE = replace(
     bif_c_members=2,
     live_rounds=1,
     live_browser_seconds=0.0,
+    per_eval_steps=200,
+    per_eval_repeats=1,
+    per_eval_rounds=1,
+    per_eval_before=False,
+    floor_dt=0.01,
+    floor_t_end=1.0,
+    peer_t_end=2.0,
+    peer_long_t_end=4.0,
+    peer_requirements=(1e-6,),
+    peer_pilot_dt=0.05,
+    heyoka_tol_steps=4,
+    peer_rounds=1,
+    pyhamsys_t_end=0.5,
+    pyhamsys_step=0.05,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

@@ -36,6 +36,8 @@ from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
 from item_live import bench_live
 from item_long_run import bench_long_run
+from item_peers import bench_heyoka, bench_pyhamsys
+from item_per_eval import bench_per_eval
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
 from item_variational import bench_variational
@@ -69,6 +71,9 @@ ITEMS = {
     "variational": (7, bench_variational, False),
     "bifurcation": (8, bench_bifurcation, False),
     "live": (9, bench_live, False),
+    "per_eval": (10, bench_per_eval, True),
+    "heyoka": (11, bench_heyoka, False),
+    "pyhamsys": (12, bench_pyhamsys, False),
 }
 
 

@@ -12,6 +12,7 @@ from pendulum_lab import analysis
 from pendulum_lab.integrators import (
     GAUSS4_TABLEAU,
     GAUSS8_TABLEAU,
+    GAUSS12_TABLEAU,
     MAIN_METHODS,
     RK4_TABLEAU,
     ButcherTableau,
@@ -21,7 +22,7 @@ from pendulum_lab.simulate import hamiltonian_field
 
 DP = pl.double_pendulum(m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81)
 SP = pl.simple_pendulum(mass=1.0, length=1.0, g=9.81)
-SYMPLECTIC = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8")
+SYMPLECTIC = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8", "glrk12")
 NOT_SYMPLECTIC = ("explicit_euler", "rk4", "semi_implicit_euler_velocity", "leapfrog_velocity")
 
 
@@ -57,6 +58,8 @@ def test_gauss_tableaus_are_collocation_of_order_2s():
     assert collocation_conditions(GAUSS4_TABLEAU, 2) < 1e-15
     assert collocation_conditions(GAUSS8_TABLEAU, 4) < 1e-14
     assert GAUSS8_TABLEAU.order == 8 and GAUSS8_TABLEAU.stages == 4
+    assert collocation_conditions(GAUSS12_TABLEAU, 6) < 1e-14
+    assert GAUSS12_TABLEAU.order == 12 and GAUSS12_TABLEAU.stages == 6
     # negative control: RK4 is order 4 but not a 4-stage collocation method
     assert collocation_conditions(RK4_TABLEAU, 4) > 1e-3
 
@@ -71,7 +74,7 @@ def test_inconsistent_tableau_is_rejected():
 def test_method_registry_properties():
     expected = {"explicit_euler": (1, False), "semi_implicit_euler": (1, True),
                 "leapfrog": (2, True), "rk4": (4, False), "glrk4": (4, True),
-                "glrk8": (8, True)}
+                "glrk8": (8, True), "glrk12": (12, True)}
     for name, (order, symplectic) in expected.items():
         method = pl.METHODS[name]
         assert (method.order, method.symplectic) == (order, symplectic)
@@ -122,6 +125,20 @@ def test_observed_order_glrk8(model, theta0):
     assert result.errors[-1] > 1e-13  # the fit stays above round-off
 
 
+# Order 12 reaches round-off faster still: larger steps and wider swings, so
+# that the errors stay well above the reference's.
+@pytest.mark.parametrize("model, theta0, t_end, dts", [
+    (DP, [1.0, 1.5], 2.0, (0.25, 0.2, 0.125, 0.1)),
+    (SP, [2.5], 4.0, (0.4, 0.25, 0.2, 0.16)),
+])
+def test_observed_order_glrk12(model, theta0, t_end, dts):
+    omega0 = np.zeros(model.n)
+    result = analysis.observed_order(model, theta0, omega0, t_end=t_end, dts=dts,
+                                     method="glrk12")
+    assert abs(result.slope - 12) <= 0.5, result
+    assert result.errors[-1] > 1e-13  # the fit stays above round-off
+
+
 def test_velocity_leapfrog_is_only_first_order_on_the_double_pendulum(dp_reference):
     # The report's leapfrog on (theta, omega) evaluates a velocity-dependent
     # acceleration at a half-step Euler velocity: it loses an order.
@@ -156,7 +173,7 @@ def test_velocity_methods_are_symplectic_for_the_simple_pendulum():
 
 
 # ---------------------------------------------------------------- reversibility
-@pytest.mark.parametrize("name", ["leapfrog", "glrk4", "glrk8"])
+@pytest.mark.parametrize("name", ["leapfrog", "glrk4", "glrk8", "glrk12"])
 def test_symmetric_methods_are_reversible(name):
     assert analysis.reversibility_error(DP, Q0, p0=P0, dt=0.05, method=name) <= 1e-12
 
@@ -251,7 +268,8 @@ def test_glrk4_too_large_dt_raises_naming_step_and_time():
         pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=20.0, dt=0.6, method="glrk4")
 
 
-@pytest.mark.parametrize("name, tableau", [("glrk4", GAUSS4_TABLEAU), ("glrk8", GAUSS8_TABLEAU)])
+@pytest.mark.parametrize("name, tableau", [("glrk4", GAUSS4_TABLEAU), ("glrk8", GAUSS8_TABLEAU),
+                                          ("glrk12", GAUSS12_TABLEAU)])
 def test_gauss_step_solves_the_collocation_equations(name, tableau):
     """The step equals the one whose stages SciPy solves independently.
 
@@ -292,6 +310,41 @@ def test_symplectic_methods_are_explicit_for_the_separable_simple_pendulum():
         assert traj.mean_iterations == 0
     traj = pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=1.0, dt=0.01, method="leapfrog")
     assert traj.mean_iterations > 2
+
+
+def test_compensated_summation_keeps_what_rounding_loses():
+    """Adding 1e-16 to 1.0 a million times: rounding loses every increment, compensation none."""
+    from pendulum_lab.integrators import _compensated_sum
+
+    compensation = np.zeros(1)
+    compensated = plain = 1.0
+    for _ in range(10**5):
+        compensated = _compensated_sum(compensated, 1e-16, compensation, 0)
+        plain = plain + 1e-16
+    assert plain == 1.0  # negative control: the plain sum never moves
+    assert abs(compensated + compensation[0] - (1.0 + 1e-11)) < 1e-16
+
+
+@pytest.mark.parametrize("name, saved", [("glrk4", 0.9), ("glrk8", 0.7), ("glrk12", 0.5)])
+def test_starting_values_save_sweeps_and_change_nothing_but_roundoff(name, saved):
+    """A run starts each step from the last one's collocation polynomial; ``pl.step`` from f(y).
+
+    Both iterate the stage equations to round-off, so the states agree to
+    round-off, but the run needs fewer sweeps, the more so the more stages
+    (the guess is O(h^s) close [HLW VIII.6.1]).
+    """
+    q, p, h, steps = np.array([2.0, 2.5]), DP.momenta([2.0, 2.5], [0.0, 0.0]), 0.005, 20
+    run = pl.simulate(DP, q, p0=p, t_end=steps * h, dt=h, method=name)
+    alone = []
+    for _ in range(steps):
+        alone.append(pl.simulate(DP, q, p0=p, t_end=h, dt=h, method=name).mean_iterations)
+        q, p = pl.step(DP, q, p0=p, dt=h, method=name)
+    assert np.max(np.abs(run.theta[-1] - q)) < 1e-12
+    assert np.max(np.abs(run.p[-1] - p)) < 1e-12
+    assert run.mean_iterations * steps < saved * sum(alone)
+    # control: a run's first step has nothing to continue and costs what a lone step does
+    first = pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=h, dt=h, method=name)
+    assert first.mean_iterations == alone[0]
 
 
 def test_simple_pendulum_symplectic_euler_is_the_textbook_update():

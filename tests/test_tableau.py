@@ -12,7 +12,7 @@ from pendulum_lab.integrators import METHODS, Method
 from pendulum_lab.tableau import ButcherTableau, gauss_legendre_tableau, rooted_trees
 
 RK4 = METHODS["rk4"].tableau
-GAUSS = {s: gauss_legendre_tableau(s) for s in (1, 2, 3, 4)}
+GAUSS = {s: gauss_legendre_tableau(s) for s in (1, 2, 3, 4, 6)}
 # Two tableaus from the literature that no registry entry uses.
 THREE_EIGHTHS = ButcherTableau(  # Kutta's 3/8 rule: order 4
     a=[[0, 0, 0, 0], [1 / 3, 0, 0, 0], [-1 / 3, 1, 0, 0], [1, -1, 1, 0]],
@@ -28,7 +28,7 @@ def test_rooted_tree_counts_are_the_known_sequence():
     assert len(set(rooted_trees(6))) == 20  # no tree counted twice
 
 
-@pytest.mark.parametrize("stages", [1, 2, 3, 4])
+@pytest.mark.parametrize("stages", [1, 2, 3, 4, 6])
 def test_gauss_satisfies_symplectic_and_simplifying_conditions(stages):
     tableau = GAUSS[stages]
     for condition in (
@@ -72,7 +72,8 @@ def test_conditions_equal_their_definitions():
 @pytest.mark.parametrize(
     "tableau, order",
     [(METHODS["explicit_euler"].tableau, 1), (HEUN3, 3), (RK4, 4), (THREE_EIGHTHS, 4),
-     (TRAPEZOIDAL, 2), (GAUSS[1], 2), (GAUSS[2], 4), (GAUSS[3], 6), (GAUSS[4], 8)],
+     (TRAPEZOIDAL, 2), (GAUSS[1], 2), (GAUSS[2], 4), (GAUSS[3], 6), (GAUSS[4], 8),
+     (GAUSS[6], 12)],
 )
 def test_order_is_derived_from_the_order_conditions(tableau, order):
     assert tableau.order == order
@@ -108,7 +109,7 @@ def test_bad_tableaus_and_arguments_are_rejected():
         gauss_legendre_tableau(0)
 
 
-@pytest.mark.parametrize("name", ["explicit_euler", "rk4", "glrk4", "glrk8"])
+@pytest.mark.parametrize("name", ["explicit_euler", "rk4", "glrk4", "glrk8", "glrk12"])
 def test_registry_entries_are_derived_from_their_tableaus(name):
     method = METHODS[name]
     tableau = method.tableau
@@ -118,15 +119,41 @@ def test_registry_entries_are_derived_from_their_tableaus(name):
     assert method.variables == "canonical"
 
 
+def test_simplified_order_is_a_lower_bound_reached_by_gauss():
+    # Gauss: B(2s), C(s), D(s) give min(2s, 2s + 1, 2s + 2) = 2s, the full order
+    for stages in (1, 2, 3, 6):
+        assert GAUSS[stages].simplified_order() == 2 * stages == GAUSS[stages].order
+    # negative control: RK4 satisfies only C(1), so the simplifying conditions promise less
+    # than its order 4, which the rooted trees then establish
+    assert RK4.simplified_order() < RK4.order == 4
+
+
+@pytest.mark.parametrize("stages", [2, 4, 6])
+def test_extrapolation_continues_polynomials_of_degree_below_s(stages):
+    """``E`` maps a polynomial's values at the nodes ``c`` to those at ``1 + c`` [HLW VIII.6]."""
+    tableau = GAUSS[stages]
+    c, extrapolation = tableau.c, tableau.extrapolation
+    rng = np.random.default_rng(stages)
+    exact = np.polynomial.Polynomial(rng.normal(size=stages))  # degree s - 1
+    assert np.max(np.abs(extrapolation @ exact(c) - exact(1 + c))) < 1e-10
+    # negative control: one degree more is not continued exactly
+    higher = np.polynomial.Polynomial(np.append(rng.normal(size=stages), 1.0))
+    assert np.max(np.abs(extrapolation @ higher(c) - higher(1 + c))) > 1e-3
+    # coinciding nodes have no interpolating polynomial
+    assert TRAPEZOIDAL.extrapolation is not None and RK4.extrapolation is None
+
+
 def test_evaluation_counts_come_from_the_stages():
     dp = pl.double_pendulum()
     for name in ("explicit_euler", "rk4"):
         run = pl.simulate(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, dt=0.01, method=name)
         assert run.evaluations == 100 * METHODS[name].tableau.stages
-    for name in ("glrk4", "glrk8"):
+    for name in ("glrk4", "glrk8", "glrk12"):
         run = pl.simulate(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, dt=0.01, method=name)
         sweeps = run.mean_iterations * 100
-        expected = 100 + METHODS[name].tableau.stages * sweeps  # one guess, then s per sweep
+        # the first step evaluates its guess f(y); every later step starts from
+        # the previous step's collocation polynomial (no evaluation); s per sweep
+        expected = 1 + METHODS[name].tableau.stages * sweeps
         assert run.evaluations == pytest.approx(expected, abs=1e-9)
 
 

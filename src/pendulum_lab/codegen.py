@@ -27,6 +27,8 @@ contain no zero force terms and ignore ``t``.
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import functools
 import hashlib
 import importlib.util
@@ -40,7 +42,10 @@ from types import SimpleNamespace
 import numba
 import numpy as np
 import sympy as sp
+from llvmlite import ir as llvm_ir
 from numba import types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from ._signatures import VECTOR
 from .discrete_mechanics import DiscreteLagrangian, discrete_lagrangian
@@ -50,8 +55,11 @@ __all__ = [
     "discrete_kernel_source",
     "kernel_source",
     "load_discrete_kernels",
+    "load_generated",
     "load_kernels",
+    "paired_trig",
     "parameters_array",
+    "sincos",
     "solve_spd",
 ]
 
@@ -88,6 +96,53 @@ def solve_spd(matrix, rhs, out):
         out[i] = s / matrix[i, i]
 
 
+def _c_library_has_sincos() -> bool:
+    try:
+        return hasattr(ctypes.CDLL(ctypes.util.find_library("m")), "sincos")
+    except OSError:
+        return False
+
+
+#: Whether the C math library has ``sincos`` (glibc does; it is not standard C).
+HAVE_SINCOS = _c_library_has_sincos()
+
+
+@intrinsic
+def sincos(typingctx, x):
+    """``(sin(x), cos(x))`` for a float ``x``, from one call of the C library's ``sincos``.
+
+    The kernels need the sine and the cosine of the same angle differences
+    (the mass matrix has ``cos(theta_i - theta_j)``, the forces
+    ``sin(theta_i - theta_j)``); one call shares the argument reduction, as a C
+    compiler arranges by itself (LLVM, behind Numba, does not). glibc's
+    ``sincos`` returns exactly ``sin(x)`` and ``cos(x)``. Without ``sincos`` in
+    the C library, two separate calls.
+    """
+    if not isinstance(x, types.Float):
+        return None
+    signature = types.UniTuple(types.float64, 2)(types.float64)
+
+    def codegen(context, builder, sig, args):
+        double = llvm_ir.DoubleType()
+        if HAVE_SINCOS:
+            function = cgutils.get_or_insert_function(
+                builder.module,
+                llvm_ir.FunctionType(llvm_ir.VoidType(), [double, double.as_pointer(),
+                                                          double.as_pointer()]),
+                "sincos",
+            )
+            sine = cgutils.alloca_once(builder, double)
+            cosine = cgutils.alloca_once(builder, double)
+            builder.call(function, [args[0], sine, cosine])
+            values = [builder.load(sine), builder.load(cosine)]
+        else:
+            values = [builder.call(builder.module.declare_intrinsic(name, [double]), args)
+                      for name in ("llvm.sin", "llvm.cos")]
+        return context.make_tuple(builder, sig.return_type, values)
+
+    return signature, codegen
+
+
 def _plain_symbols(chain: Chain):
     """Map the chain's symbols to short names that cannot clash with the arguments."""
     n = chain.n
@@ -99,9 +154,41 @@ def _plain_symbols(chain: Chain):
     return th, w, pars, mapping
 
 
-def _assignments(targets: list[str], exprs: list[sp.Expr], mapping: dict, prefix: str) -> list[str]:
-    """Lines ``target = expression`` with common subexpressions shared (``cse``)."""
-    exprs = [sp.sympify(e).xreplace(mapping) for e in exprs]
+def paired_trig(exprs: list[sp.Expr], mapping: dict) -> tuple[list[tuple], dict]:
+    """The angles whose sine and cosine ``exprs`` both need, to compute them together.
+
+    Returns ``pairs``, a list of ``(sine, cosine, angle)`` (new symbols
+    ``sin0``, ``cos0``, ... and the angle, after ``mapping``), and the
+    substitution ``{sin(angle): sine, cos(angle): cosine}`` for the
+    expressions. The kernels compute each pair with :func:`sincos`; the C
+    yardstick of the benchmarks with C's ``sincos``, so that both do the same
+    arithmetic.
+    """
+    kinds: dict = {}
+    for expr in exprs:
+        for call in sp.sympify(expr).xreplace(mapping).atoms(sp.sin, sp.cos):
+            kinds.setdefault(call.args[0], set()).add(call.func)
+    pairs, substitution = [], {}
+    for k, angle in enumerate(sorted((x for x, f in kinds.items() if len(f) == 2), key=str)):
+        sine, cosine = sp.Symbol(f"sin{k}", real=True), sp.Symbol(f"cos{k}", real=True)
+        pairs.append((sine, cosine, angle))
+        substitution |= {sp.sin(angle): sine, sp.cos(angle): cosine}
+    return pairs, substitution
+
+
+def _trig_lines(exprs: list[sp.Expr], mapping: dict) -> tuple[list[str], dict]:
+    """:func:`paired_trig` as kernel lines ``sin0, cos0 = sincos(angle)``, and the substitution."""
+    pairs, substitution = paired_trig(exprs, mapping)
+    return [f"{s}, {c} = sincos({sp.pycode(angle)})" for s, c, angle in pairs], substitution
+
+
+def _assignments(targets: list[str], exprs: list[sp.Expr], mapping: dict, prefix: str,
+                 trig: dict | None = None) -> list[str]:
+    """Lines ``target = expression`` with common subexpressions shared (``cse``).
+
+    ``trig`` replaces sines and cosines computed beforehand (:func:`paired_trig`).
+    """
+    exprs = [sp.sympify(e).xreplace(mapping).xreplace(trig or {}) for e in exprs]
     temps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols(prefix))
     lines = [f"{t} = {sp.pycode(e)}" for t, e in temps]
     lines += [f"{t} = {sp.pycode(e)}" for t, e in zip(targets, reduced)]
@@ -109,7 +196,8 @@ def _assignments(targets: list[str], exprs: list[sp.Expr], mapping: dict, prefix
 
 
 def _solve_lines(chain: Chain, mapping: dict, rhs: list[str], rhs_array: str, out: str,
-                 prefix: str, mass: sp.Matrix | None = None) -> list[str]:
+                 prefix: str, trig: dict | None = None,
+                 mass: sp.Matrix | None = None) -> list[str]:
     """Lines that solve ``M(q) out = rhs`` (or ``mass out = rhs``, ``mass`` SPD).
 
     ``rhs`` names the right-hand side's entries, ``rhs_array`` the array that
@@ -120,10 +208,11 @@ def _solve_lines(chain: Chain, mapping: dict, rhs: list[str], rhs_array: str, ou
     n = chain.n
     mass = list(chain.mass_matrix if mass is None else mass)
     if n == 1:
-        (m00,) = _assignments(["m00"], mass, mapping, prefix)
+        (m00,) = _assignments(["m00"], mass, mapping, prefix, trig)
         return [m00, f"{out}[0] = {rhs[0]} / m00"]
     if n == 2:
-        lines = _assignments(["m00", "m01", "m11"], [mass[0], mass[1], mass[3]], mapping, prefix)
+        lines = _assignments(["m00", "m01", "m11"], [mass[0], mass[1], mass[3]], mapping, prefix,
+                             trig)
         return lines + [
             "det = m00 * m11 - m01 * m01",
             f"{out}[0] = (m11 * {rhs[0]} - m01 * {rhs[1]}) / det",
@@ -131,7 +220,7 @@ def _solve_lines(chain: Chain, mapping: dict, rhs: list[str], rhs_array: str, ou
         ]
     lines = [f"mass = np.empty(({n}, {n}))"]
     lines += _assignments([f"mass[{i}, {j}]" for i in range(n) for j in range(n)], mass,
-                          mapping, prefix)
+                          mapping, prefix, trig)
     return lines + [f"solve_spd(mass, {rhs_array}, {out})"]
 
 
@@ -141,19 +230,24 @@ def kernel_source(chain: Chain) -> str:
     _, _, _, mapping = _plain_symbols(chain)
     unpack = [f"th{i} = q[{i}]" for i in range(n)]
     unpack += [f"par{i} = params[{i}]" for i in range(len(chain.parameters))]
-    hamilton = list(unpack)
-    hamilton += _solve_lines(chain, mapping, [f"p[{i}]" for i in range(n)], "p", "dq", "a")
-    hamilton += [f"w{i} = dq[{i}]" for i in range(n)]
     momentum_rates = chain.dlagrangian_dq
     if chain.forced:
         momentum_rates = momentum_rates + chain.generalized_forces
-    hamilton += _assignments([f"dp[{i}]" for i in range(n)], list(momentum_rates), mapping, "b")
-    accel = unpack + [f"w{i} = v[{i}]" for i in range(n)]
+    mass = list(chain.mass_matrix)
+    trig_lines, trig = _trig_lines(mass + list(momentum_rates), mapping)
+    hamilton = unpack + trig_lines
+    hamilton += _solve_lines(chain, mapping, [f"p[{i}]" for i in range(n)], "p", "dq", "a",
+                             trig)
+    hamilton += [f"w{i} = dq[{i}]" for i in range(n)]
+    hamilton += _assignments([f"dp[{i}]" for i in range(n)], list(momentum_rates), mapping, "b",
+                             trig)
+    trig_lines, trig = _trig_lines(mass + list(chain.forcing), mapping)
+    accel = unpack + trig_lines + [f"w{i} = v[{i}]" for i in range(n)]
     forcing = [f"f{i}" for i in range(n)] if n <= 2 else [f"rhs[{i}]" for i in range(n)]
     if n > 2:
         accel += [f"rhs = np.empty({n})"]
-    accel += _assignments(forcing, list(chain.forcing), mapping, "c")
-    accel += _solve_lines(chain, mapping, forcing, "rhs", "out", "a")
+    accel += _assignments(forcing, list(chain.forcing), mapping, "c", trig)
+    accel += _solve_lines(chain, mapping, forcing, "rhs", "out", "a", trig)
 
     def body(lines):
         return "\n".join("    " + line for line in lines)
@@ -172,7 +266,10 @@ import numba
 import numpy as np
 
 from pendulum_lab._signatures import ACCELERATION, HAMILTON
-from pendulum_lab.codegen import solve_spd
+from pendulum_lab.codegen import sincos, solve_spd
+
+#: Coordinates of the state (``q`` and ``p`` each have this many).
+COORDINATES = {n}
 
 
 @numba.njit(HAMILTON, cache=True)
@@ -215,20 +312,26 @@ def load_kernels(n: int, forced: bool = False) -> SimpleNamespace:
 
     ``forced`` selects the chain with damping and drive (see
     :class:`~pendulum_lab.mechanics.Chain`). Returns a namespace with
-    ``hamilton`` and ``acceleration``.
+    ``hamilton``, ``acceleration``, ``source``, ``path`` and ``module`` (the
+    name the generated module is imported under, which also defines
+    ``COORDINATES = n``).
     """
     source = kernel_source(derive_chain(n, forced))
-    module, path = _import_generated(f"chain{n}_forced" if forced else f"chain{n}", source)
+    module, path = load_generated(f"chain{n}_forced" if forced else f"chain{n}", source)
     return SimpleNamespace(hamilton=module.hamilton, acceleration=module.acceleration,
-                           source=source, path=path)
+                           source=source, path=path, module=module.__name__)
 
 
-def _import_generated(stem: str, source: str, derived_from=()):
-    """Write ``source`` into the cache folder (if changed) and import it as a module.
+def load_generated(stem: str, source: str, derived_from=(), inject: dict | None = None):
+    """Write generated Python ``source`` into the kernel cache folder (if changed) and import it.
 
-    The file name carries a hash of the generated text and of the modules it
-    comes from (this one, the signatures, and ``derived_from``), so a change
-    in any of them gets a fresh file and a fresh Numba cache.
+    The file is ``<stem>_<digest>.py``, where the digest hashes the source and
+    the package modules it comes from (this one, the signatures, and the file
+    names in ``derived_from``), so a change in any of them gets a fresh file
+    and a fresh Numba cache: Numba's cache checks only the generated file
+    itself. ``inject`` sets module globals before the source runs (objects
+    that cannot be imported by name). Returns ``(module, path)``; the module
+    is registered in ``sys.modules`` as ``pendulum_lab_kernels_<stem>_<digest>``.
     """
     here = Path(__file__).parent
     support = b"".join((here / name).read_bytes()
@@ -239,6 +342,7 @@ def _import_generated(stem: str, source: str, derived_from=()):
     name = f"pendulum_lab_kernels_{stem}_{digest}"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
+    module.__dict__.update(inject or {})
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module, path
@@ -369,7 +473,7 @@ def load_discrete_kernels(n: int, rule: str) -> SimpleNamespace:
     ``impulse`` (see :func:`discrete_kernel_source`), ``source`` and ``path``.
     """
     source = discrete_kernel_source(discrete_lagrangian(n, rule))
-    module, path = _import_generated(f"discrete{n}_{rule}", source,
+    module, path = load_generated(f"discrete{n}_{rule}", source,
                                      derived_from=("discrete_mechanics.py", "mechanics.py"))
     return SimpleNamespace(fixed_point_update=module.fixed_point_update,
                            newton_update=module.newton_update,

@@ -9,13 +9,22 @@ the course report's velocity-variable methods. ``t`` is the time, for fields
 that depend on it (a driven pendulum).
 
 Every method is a step function ``(hamilton, acceleration, t, q, p, h,
-params, separable, damping_rate) -> (q1, p1, sweeps, calls)`` advancing from
-time ``t`` to ``t + h``: ``p`` is the canonical momentum for all methods
-except the two ``*_velocity`` ones, where it is the velocity; ``sweeps``
-counts implicit-solver iterations (``-1``: did not converge) and ``calls``
-the vector-field evaluations. ``separable`` and ``damping_rate`` describe the
-field (see :class:`HamiltonianField`). :func:`run` drives any of them over
-many steps and many initial states; it is the only time loop.
+params, separable, damping_rate[, memory]) -> (q1, p1, sweeps, calls)``
+advancing from time ``t`` to ``t + h``: ``p`` is the canonical momentum for
+all methods except the two ``*_velocity`` ones, where it is the velocity;
+``sweeps`` counts implicit-solver iterations (``-1``: did not converge) and
+``calls`` the vector-field evaluations. ``separable`` and ``damping_rate``
+describe the field (see :class:`HamiltonianField`). A step declared with a
+memory size (``jit_step(memory=...)``) takes one more argument, ``memory``:
+floats that the time loop keeps for each trajectory from one step to the
+next. Steps use it as workspace (no memory is allocated inside a run) and
+the implicit Runge-Kutta methods for what they carry between steps: the
+last stage slopes, from which the next step's iteration starts, and the
+rounding error of the state (compensated summation). A fresh ``memory``
+(zeros) is a first step: nothing carried over. The time loop that drives the
+steps is :mod:`pendulum_lab.loops`; it compiles each method together with
+each field, so the field's kernels are called directly (and inlined), not
+through function pointers.
 
 Methods are data where they can be: a Runge-Kutta method (explicit Euler,
 RK4, Gauss-Legendre) is one registry entry made from its Butcher tableau by
@@ -48,11 +57,13 @@ References
 ----------
 .. [HLW] E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*,
    2nd ed., Springer 2006: symplectic Euler (Thm VI.3.3), Stormer-Verlet for
-   general H (eq. VI.3.4), Gauss collocation (Sect. II.1.3, VI.4); a
-   time-dependent H is made autonomous by taking t as one more coordinate.
+   general H (eq. VI.3.4), Gauss collocation (Sect. II.1.3, VI.4), starting
+   values for the stage iteration (Sect. VIII.6.1), compensated summation
+   (Sect. VIII.5); a time-dependent H is made autonomous by taking t as one
+   more coordinate.
 .. [HMR] E. Hairer, R. I. McLachlan, A. Razakarivony, "Achieving Brouwer's
    law with implicit Runge-Kutta methods", BIT 48 (2008) 231-243: iterate the
-   stage equations to round-off, or energy drifts.
+   stage equations to round-off, or energy drifts; compensated summation.
 .. [MP] R. I. McLachlan, M. Perlmutter, "Conformal Hamiltonian systems",
    J. Geom. Phys. 39 (2001) 276-300: splitting a conformal Hamiltonian field
    into its Hamiltonian part and the linear damping keeps the exact
@@ -65,15 +76,17 @@ References
 from __future__ import annotations
 
 import functools
+import hashlib
+import inspect
 import math
 from dataclasses import dataclass, field
 
 import numba
 import numpy as np
 from numba import types
+from numba.extending import intrinsic
 
 from . import _validation as check
-from ._signatures import ACCELERATION, HAMILTON, VECTOR
 from .discrete_mechanics import RULES
 from .tableau import ButcherTableau, gauss_legendre_tableau
 
@@ -85,14 +98,16 @@ __all__ = [
     "ConvergenceError",
     "HamiltonianField",
     "Method",
+    "Step",
     "explicit_rk",
     "fixed_point_status",
     "gauss_legendre_tableau",
     "get_method",
     "implicit_kick",
     "implicit_rk",
+    "jit_step",
+    "kernel_function",
     "remove_damping",
-    "run",
     "step_kernels",
     "suitable_methods",
     "tableau_step",
@@ -138,43 +153,67 @@ class HamiltonianField:
     discrete: object = field(default=None, repr=False)
 
 
-# --------------------------------------------------------------------------- kernel types
-HamiltonFn = types.FunctionType(HAMILTON)
-AccelerationFn = types.FunctionType(ACCELERATION)
-STEP = types.Tuple((VECTOR, VECTOR, types.int64, types.int64))(
-    HamiltonFn, AccelerationFn, types.float64, VECTOR, VECTOR, types.float64, VECTOR,
-    types.boolean, types.float64,
-)
+# --------------------------------------------------------------------------- declaring steps
+#: Decorator of every function that receives a kernel (``hamilton``,
+#: ``acceleration``, a step) as an argument. Such a function is compiled into
+#: each field's time loop (:mod:`pendulum_lab.loops`), where the kernels are
+#: known: inlined there, its kernel calls are direct calls. (A Numba function
+#: compiled on its own with a kernel argument would hold a pointer to a Python
+#: object, which Numba cannot keep in its disk cache.)
+kernel_function = numba.njit(inline="always")
 
 
-class LazyKernel:
-    """A Numba kernel with a fixed signature, compiled on first use.
+class Step:
+    """A method's step function, compiled into the time loop of each field it integrates.
 
-    Numba compiles a function with an explicit signature as soon as it is
-    decorated; on a machine that has never run the package that would put
-    half a minute into ``import pendulum_lab``. Wrapped like this, only the
-    methods actually used get compiled, once: ``cache=True`` keeps the machine
-    code on disk for later processes. ``py_func`` is the Python source.
+    Make one with :func:`jit_step`. ``py_func`` is the Python source;
+    ``memory(n)`` the floats the step keeps per trajectory for a state of
+    ``n`` coordinates (0: the step takes no ``memory`` argument);
+    ``compiled`` the Numba function the time loop calls, always with a
+    ``memory`` argument; ``digest`` identifies the code and constants the
+    step compiles to (the generated loops are cached under it).
     """
 
-    def __init__(self, signature, py_func, **options):
+    def __init__(self, py_func, memory=None):
         functools.update_wrapper(self, py_func)
         self.py_func = py_func
-        self.signature = signature
-        self.options = options
+        self.memory = memory if memory is not None else (lambda n: 0)
+        inner = kernel_function(py_func)
+        if memory is None:  # the loop passes memory to every step; this one ignores it
+
+            def ignores_memory(hamilton, acceleration, t, q, p, h, params, separable,
+                               damping_rate, memory):
+                return inner(hamilton, acceleration, t, q, p, h, params, separable,
+                             damping_rate)
+
+            self.compiled = kernel_function(ignores_memory)
+        else:
+            self.compiled = inner
 
     @functools.cached_property
-    def compiled(self):
-        """The Numba dispatcher (compiled, or loaded from the cache, now)."""
-        return numba.njit(self.signature, **self.options)(self.py_func)
+    def digest(self) -> str:
+        """A hash of the step's source, of its module's source and of its constants."""
+        module = inspect.getmodule(self.py_func)
+        parts = [inspect.getsource(self.py_func), inspect.getsource(module)]
+        for cell in self.py_func.__closure__ or ():
+            value = cell.cell_contents
+            parts.append(value.tobytes().hex() if isinstance(value, np.ndarray) else repr(value))
+        return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
     def __call__(self, *args):
-        return self.compiled(*args)
+        return self.py_func(*args)
 
 
-def jit_step(py_func) -> LazyKernel:
-    """Declare a step function: a kernel with the :data:`STEP` signature."""
-    return LazyKernel(STEP, py_func, cache=True)
+def jit_step(py_func=None, *, memory=None):
+    """Declare a step function (see the module docstring): ``@jit_step`` or ``@jit_step(memory=f)``.
+
+    ``memory(n)`` is the number of floats the step keeps per trajectory for a
+    state of ``n`` coordinates; a step declared with it takes the ``memory``
+    argument last.
+    """
+    if py_func is None:
+        return lambda fn: Step(fn, memory)
+    return Step(py_func, memory)
 
 
 # --------------------------------------------------------------------------- implicit solver
@@ -185,7 +224,7 @@ ROUNDOFF_TOLERANCE = 1e-11
 EPSILON = np.finfo(np.float64).eps
 
 
-@numba.njit(cache=True)
+@numba.njit(inline="always")
 def fixed_point_status(new, old, smallest):
     """The stopping rule of every implicit solve here, applied per component.
 
@@ -200,148 +239,285 @@ def fixed_point_status(new, old, smallest):
     shrinking increment and needs no tuning to the problem; the prediction
     saves the sweeps a plain stall test would spend at round-off.
     """
-    # rate: the largest ratio of an increment to the one before it, over the
-    # components whose previous increment was well above round-off (below
-    # that, ratios are noise); unknown on the first sweep or if none qualifies
-    rate, measured, first, small = 0.0, False, False, True
-    worst = 0.0  # the largest relative increment among components still improving
+    # Most sweeps are far from round-off: a first pass finds that out (and
+    # whether all is finite) and records the smallest increments; the full
+    # test runs only on the last few sweeps. The loops are written without
+    # branches (`&`, `|`, conditional expressions): this rule runs once per
+    # sweep and, with data-dependent branches, cost as much as a stage.
+    small, finite = True, True
     for i in range(new.size):
         x = new[i]
-        if not math.isfinite(x):
-            return -1
-        delta, previous = abs(x - old[i]), smallest[i]
-        if delta > ROUNDOFF_TOLERANCE * (1.0 + abs(x)):
-            small = False
-        if not math.isfinite(previous):
-            first = True
-        elif previous > 256.0 * EPSILON * abs(x):
-            rate, measured = max(rate, delta / previous), True
-        if delta < previous:
-            smallest[i] = delta
-            if delta > 0.0:
-                worst = max(worst, delta / abs(x) if x != 0.0 else math.inf)
+        finite &= math.isfinite(x)
+        small &= abs(x - old[i]) <= ROUNDOFF_TOLERANCE * (1.0 + abs(x))
+    if not finite:
+        return -1
     if not small:
+        for i in range(new.size):
+            smallest[i] = min(smallest[i], abs(new[i] - old[i]))
         return 0
-    if worst == 0.0:  # every component stalled or exactly unchanged
+    return _roundoff_status(new, old, smallest)
+
+
+@numba.njit(inline="always")
+def _roundoff_status(new, old, smallest):
+    """:func:`fixed_point_status` once every increment is tiny: stalled, or predicted done?"""
+    # rate: the largest ratio of an increment to the one before it, over the
+    # components whose previous increment was well above round-off (below
+    # that, ratios are noise); unknown on the first sweep or if none qualifies.
+    # worst: the largest relative increment among components still improving.
+    # Both are kept as fractions (numerator, denominator) and compared by cross
+    # products: a division per component would cost more than the rest.
+    rate_num, rate_den, worst_num, worst_den = 0.0, 1.0, 0.0, 1.0
+    measured, first = False, False
+    for i in range(new.size):
+        x = new[i]
+        delta, previous, size = abs(x - old[i]), smallest[i], abs(x)
+        unknown = math.isinf(previous)
+        counts = (not unknown) & (previous > 256.0 * EPSILON * size)
+        first |= unknown
+        measured |= counts
+        faster = counts & (delta * rate_den > rate_num * previous)
+        rate_num, rate_den = (delta, previous) if faster else (rate_num, rate_den)
+        improving = delta < previous
+        smallest[i] = delta if improving else previous
+        # size 0 makes an infinite relative increment (denominator 0)
+        worse = improving & (delta > 0.0) & (delta * worst_den > worst_num * size)
+        worst_num, worst_den = (delta, size) if worse else (worst_num, worst_den)
+    if worst_num == 0.0:  # every component stalled or exactly unchanged
         return 1
-    # the improving ones are done if rate / (1 - rate) * increment < half an ulp
-    done = measured and not first and rate < 1.0 and rate * worst <= 0.5 * EPSILON * (1.0 - rate)
+    # the improving ones are done if rate / (1 - rate) * worst < half an ulp
+    done = (measured and not first and rate_num < rate_den and worst_den > 0.0
+            and rate_num * worst_num <= 0.5 * EPSILON * (rate_den - rate_num) * worst_den)
     return 1 if done else 0
 
 
 # --------------------------------------------------------------------------- Runge-Kutta methods
-@numba.njit(cache=True)
-def explicit_rk(hamilton, t, q, p, h, params, a, b, c):
+@intrinsic
+def _element_address(typingctx, array, index):
+    """The address of ``array[index]`` (a 1-d contiguous array) as a typed pointer."""
+    signature = types.CPointer(array.dtype)(array, index)
+
+    def codegen(context, builder, sig, args):
+        data = context.make_array(sig.args[0])(context, builder, args[0]).data
+        return builder.gep(data, [args[1]])
+
+    return signature, codegen
+
+
+@numba.njit(inline="always")
+def span(memory, start, length):
+    """``memory[start : start + length]`` as a view without a reference count.
+
+    The step functions carve their workspace out of ``memory`` with this.
+    An ordinary slice is reference counted: each view and each argument
+    passed on costs an atomic increment and decrement, several times the
+    arithmetic of a small step; a reshape calls into Numba's runtime. This
+    view points into ``memory``'s data and owns nothing, so it must not
+    outlive ``memory`` (it never leaves the time loop).
+    """
+    return numba.carray(_element_address(memory, start), length)
+
+
+@numba.njit(inline="always")
+def vector(memory, index, n):
+    """The ``index``-th vector of ``n`` floats in ``memory`` (a :func:`span`)."""
+    return span(memory, index * n, n)
+
+
+@numba.njit(inline="always")
+def unmanaged(array):
+    """``array`` (1-d, contiguous) as a view without a reference count (see :func:`vector`)."""
+    return numba.carray(_element_address(array, 0), array.size)
+
+
+def explicit_rk_memory(stages: int, n: int) -> int:
+    """Floats of workspace :func:`explicit_rk` needs: the stage slopes and two states."""
+    return (2 * stages + 4) * n
+
+
+@kernel_function
+def explicit_rk(hamilton, t, q, p, h, params, a, b, c, work):
     """One step of the explicit Runge-Kutta method ``(a, b, c)``.
 
     Stage ``i`` evaluates the field at time ``t + c_i h`` and state
     ``y + h sum_{j<i} a_ij k_j``; the step is ``y + h sum_i b_i k_i``. Written
-    with element loops and one block of memory for all the vectors:
-    allocating each small array separately would cost more than the
-    arithmetic.
+    with element loops in the workspace ``work`` (:func:`explicit_rk_memory`
+    floats: vectors ``2 i`` and ``2 i + 1`` hold stage ``i``'s ``dq``, ``dp``,
+    then come the stage state and the new state): allocating small arrays
+    would cost more than the arithmetic. The new state is returned as views
+    into ``work``.
     """
     stages, n = b.size, q.size
-    work = np.empty((2 * stages + 4, n))
-    kq, kp = work[:stages], work[stages : 2 * stages]
-    qi, pi, q1, p1 = work[2 * stages], work[2 * stages + 1], work[-2], work[-1]
+    qi, pi = vector(work, 2 * stages, n), vector(work, 2 * stages + 1, n)
+    q1, p1 = vector(work, 2 * stages + 2, n), vector(work, 2 * stages + 3, n)
     for i in range(stages):
         for m in range(n):
             qi[m], pi[m] = q[m], p[m]
             for j in range(i):
-                qi[m] += h * a[i, j] * kq[j, m]
-                pi[m] += h * a[i, j] * kp[j, m]
-        hamilton(t + c[i] * h, qi, pi, params, kq[i], kp[i])
-    q1[:], p1[:] = q, p
+                qi[m] += h * a[i, j] * work[2 * j * n + m]
+                pi[m] += h * a[i, j] * work[(2 * j + 1) * n + m]
+        hamilton(t + c[i] * h, qi, pi, params, vector(work, 2 * i, n),
+                 vector(work, 2 * i + 1, n))
+    for m in range(n):
+        q1[m], p1[m] = q[m], p[m]
     for i in range(stages):
         for m in range(n):
-            q1[m] += h * b[i] * kq[i, m]
-            p1[m] += h * b[i] * kp[i, m]
+            q1[m] += h * b[i] * work[2 * i * n + m]
+            p1[m] += h * b[i] * work[(2 * i + 1) * n + m]
     return q1, p1
 
 
-@numba.njit(cache=True)
-def implicit_rk(hamilton, t, q, p, h, params, a, b, c):
+def implicit_rk_memory(stages: int, n: int) -> int:
+    """Floats of memory :func:`implicit_rk` keeps per trajectory.
+
+    In vectors of ``n`` floats: the compensation of the state's rounding
+    (2), two iterates of the stage slopes (``2 x 2 s``), the stopping rule's
+    record (``2 s``), a stage's state and the new state (4); then two numbers
+    saying which slopes are stored: the step size they belong to (0: none)
+    and the iterate that holds them.
+    """
+    return (6 * stages + 6) * n + 2
+
+
+@kernel_function
+def implicit_rk(hamilton, t, q, p, h, params, a, b, c, extrapolation, memory):
     """One step of the implicit Runge-Kutta method ``(a, b, c)``.
 
     The stage slopes solve ``K_i = f(t + c_i h, y + h sum_j a_ij K_j)``; they
-    are found by fixed-point iteration from the guess ``K_i = f(t, y)``, each
-    sweep re-evaluating every stage at the latest slopes, until
-    :func:`fixed_point_status` finds round-off. The step is
-    ``y1 = y + h sum_i b_i K_i``. Returns ``(q1, p1, sweeps, calls)``, with
-    ``sweeps = -1`` if the iteration did not converge.
+    are found by fixed-point iteration, each sweep re-evaluating every stage
+    at the latest slopes, until :func:`fixed_point_status` finds round-off.
+
+    The first guess: if ``memory`` holds the slopes of a previous step of the
+    same size, they are continued with ``K_i^0 = sum_j E_ij K_j^prev``
+    (``E = extrapolation``, :attr:`ButcherTableau.extrapolation`: the
+    derivative of the previous step's collocation polynomial, one step on),
+    which is ``O(h^s)`` close [HLW, Sect. VIII.6.1] and saves sweeps;
+    otherwise (a first step, or ``extrapolation`` empty) the guess is
+    ``K_i^0 = f(t, y)``, one evaluation. The step is
+    ``y1 = y + h sum_i b_i K_i``, added with compensated summation: the part
+    of the increment that rounding to ``y1`` loses is kept in ``memory`` and
+    added at the next step, so that round-off does not accumulate over a long
+    run [HLW, Sect. VIII.5]. ``memory`` holds :func:`implicit_rk_memory`
+    floats. Returns ``(q1, p1, sweeps, calls)`` (``q1, p1`` views into
+    ``memory``), with ``sweeps = -1`` if the iteration did not converge.
     """
     stages, n = b.size, q.size
-    # Two iterates in one block of memory: slopes[k, 0, i] and slopes[k, 1, i]
-    # are dq and dp of stage i in iterate k, and flat[k] is iterate k as one
-    # vector for the stopping rule (views made once: reshaping costs more
-    # than a sweep's arithmetic).
-    block = np.empty(2 * 2 * stages * n)
-    slopes, flat = block.reshape((2, 2, stages, n)), block.reshape((2, 2 * stages * n))
-    current = 0
-    hamilton(t, q, p, params, slopes[current, 0, 0], slopes[current, 1, 0])
-    for i in range(1, stages):
-        slopes[current, :, i] = slopes[current, :, 0]
-    smallest = np.full(2 * stages * n, np.inf)
-    stage_q, stage_p = np.empty(n), np.empty(n)
+    size = 2 * stages * n  # one iterate of the slopes, in floats
+    # Vector 2 (k s + i) + r of the slopes region, from float 2 n on, is the dq
+    # (r = 0) or dp (r = 1) of stage i in iterate k; iterate k as one vector
+    # (for the stopping rule) starts at float 2 n + k size.
+    slopes = 2 * n
+    compensation, smallest = span(memory, 0, slopes), span(memory, slopes + 2 * size, size)
+    work = slopes + 3 * size
+    stage_q, stage_p = span(memory, work, n), span(memory, work + n, n)
+    q1, p1 = span(memory, work + 2 * n, n), span(memory, work + 3 * n, n)
+    stored_step, stored_iterate = work + 4 * n, work + 4 * n + 1
+    calls = 0
+    if memory[stored_step] == h and extrapolation.shape[0] == stages:
+        previous = int(memory[stored_iterate])
+        current = 1 - previous
+        for i in range(stages):
+            for m in range(2 * n):  # dq then dp
+                guess = 0.0
+                for j in range(stages):
+                    guess += extrapolation[i, j] * memory[slopes + previous * size + 2 * j * n + m]
+                memory[slopes + current * size + 2 * i * n + m] = guess
+    else:
+        current = 0
+        hamilton(t, q, p, params, span(memory, slopes, n), span(memory, slopes + n, n))
+        calls = 1
+        for i in range(1, stages):
+            for m in range(2 * n):
+                memory[slopes + 2 * i * n + m] = memory[slopes + m]
+    smallest[:] = np.inf
     sweeps, status = 0, 0
     while status == 0 and sweeps < MAX_SWEEPS:
         sweeps += 1
         new = 1 - current
+        old_at, new_at = slopes + current * size, slopes + new * size
         for i in range(stages):
-            for m in range(n):
-                sum_q, sum_p = 0.0, 0.0
+            # sum_j a_ij K_j, all 2 n components at once (the compiler vectorizes this)
+            for m in range(2 * n):
+                total = 0.0
                 for j in range(stages):
-                    sum_q += a[i, j] * slopes[current, 0, j, m]
-                    sum_p += a[i, j] * slopes[current, 1, j, m]
-                stage_q[m], stage_p[m] = q[m] + h * sum_q, p[m] + h * sum_p
-            hamilton(t + c[i] * h, stage_q, stage_p, params, slopes[new, 0, i], slopes[new, 1, i])
-        status = fixed_point_status(flat[new], flat[current], smallest)
+                    total += a[i, j] * memory[old_at + 2 * j * n + m]
+                memory[work + m] = total
+            for m in range(n):
+                stage_q[m], stage_p[m] = q[m] + h * stage_q[m], p[m] + h * stage_p[m]
+            out = new_at + 2 * i * n
+            hamilton(t + c[i] * h, stage_q, stage_p, params, span(memory, out, n),
+                     span(memory, out + n, n))
+        status = fixed_point_status(span(memory, new_at, size), span(memory, old_at, size),
+                                    smallest)
         current = new
-    calls = 1 + stages * sweeps
+    calls += stages * sweeps
     if status != 1:
+        memory[stored_step] = 0.0
         return q, p, -1, calls
-    q1, p1 = q.copy(), p.copy()
-    for i in range(stages):
-        for m in range(n):
-            q1[m] += h * b[i] * slopes[current, 0, i, m]
-            p1[m] += h * b[i] * slopes[current, 1, i, m]
+    memory[stored_step], memory[stored_iterate] = h, current
+    at = slopes + current * size
+    for m in range(n):
+        increment_q, increment_p = 0.0, 0.0
+        for i in range(stages):
+            increment_q += b[i] * memory[at + 2 * i * n + m]
+            increment_p += b[i] * memory[at + (2 * i + 1) * n + m]
+        q1[m] = _compensated_sum(q[m], h * increment_q, compensation, m)
+        p1[m] = _compensated_sum(p[m], h * increment_p, compensation, n + m)
     return q1, p1, sweeps, calls
 
 
-def tableau_step(tableau: ButcherTableau, name: str) -> LazyKernel:
+@numba.njit(inline="always")
+def _compensated_sum(y, increment, compensation, i):
+    """``y + increment``, with the rounding error carried in ``compensation[i]`` [HLW, VIII.5]."""
+    carried = compensation[i] + increment
+    total = y + carried
+    compensation[i] = carried + (y - total)
+    return total
+
+
+def tableau_step(tableau: ButcherTableau, name: str) -> Step:
     """The step function of the Runge-Kutta method ``name``, made from its tableau.
 
     An explicit tableau is stepped by :func:`explicit_rk`, an implicit one by
-    :func:`implicit_rk`. The coefficients are closed over, so Numba compiles
-    them in as constants; the evaluation count comes from the number of
-    stages. Each method's step is named ``<name>_step``: Numba names its
-    machine code and its disk cache after the function, and closures sharing
-    one name could be mixed up when some are loaded from the cache and others
-    compiled in the same process (numba/numba#5128).
+    :func:`implicit_rk` (which starts each step from the previous one through
+    the tableau's :attr:`~ButcherTableau.extrapolation`). The coefficients are
+    closed over, so Numba compiles them in as constants; the evaluation count
+    comes from the number of stages. Each method's step is named
+    ``<name>_step``.
     """
     a, b, c, stages = tableau.a, tableau.b, tableau.c, tableau.stages
     if tableau.explicit:
 
         def explicit_tableau_step(hamilton, acceleration, t, q, p, h, params, separable,
-                                  damping_rate):
+                                  damping_rate, memory):
             """One step of an explicit Runge-Kutta method: ``stages`` evaluations."""
-            q1, p1 = explicit_rk(hamilton, t, q, p, h, params, a, b, c)
+            q1, p1 = explicit_rk(hamilton, t, q, p, h, params, a, b, c, memory)
             return q1, p1, 0, stages
 
-        step = explicit_tableau_step
+        step, size = explicit_tableau_step, functools.partial(explicit_rk_memory, stages)
     else:
+        extrapolation = tableau.extrapolation
+        if extrapolation is None:  # coinciding nodes: no polynomial to continue
+            extrapolation = np.zeros((0, 0))
 
         def implicit_tableau_step(hamilton, acceleration, t, q, p, h, params, separable,
-                                  damping_rate):
+                                  damping_rate, memory):
             """One step of an implicit Runge-Kutta method (stages by fixed-point iteration)."""
-            return implicit_rk(hamilton, t, q, p, h, params, a, b, c)
+            return implicit_rk(hamilton, t, q, p, h, params, a, b, c, extrapolation, memory)
 
-        step = implicit_tableau_step
+        step, size = implicit_tableau_step, functools.partial(implicit_rk_memory, stages)
     step.__name__ = step.__qualname__ = f"{name}_step"
-    return jit_step(step)
+    return jit_step(step, memory=size)
 
 
 # --------------------------------------------------------------------------- symplectic methods
+@numba.njit(inline="always")
+def add_scaled(out, x, factor, y):
+    """``out = x + factor * y``, element by element (no temporary arrays)."""
+    for i in range(out.size):
+        out[i] = x[i] + factor * y[i]
+
+
 @numba.njit(cache=True)
 def remove_damping(p, damping_rate, dp):
     """``dp += damping_rate p``: from a conformal field's ``dp/dt`` to its Hamiltonian part's.
@@ -355,115 +531,136 @@ def remove_damping(p, damping_rate, dp):
         dp[i] += damping_rate * p[i]
 
 
-@numba.njit(cache=True)
-def implicit_kick(hamilton, t, q, p, k, params, separable, damping_rate, dq, dp):
-    """Solve ``p_k = p - k H_q(t, q, p_k)`` for ``p_k``: the implicit momentum update.
+@kernel_function
+def implicit_kick(hamilton, t, q, p, k, params, separable, damping_rate, dq, dp, p_k, p_new,
+                  smallest):
+    """Solve ``p_k = p - k H_q(t, q, p_k)`` for ``p_k`` (written into ``p_k``): the momentum update.
 
     Starts from ``p + k dp``, so ``dp`` must hold ``-H_q(t, q, p)`` on entry
     (see :func:`remove_damping` for ``damping_rate``);
     the guess is exact when ``H`` is separable. Otherwise iterates
     ``p_k <- p + k dp(t, q, p_k)`` until :func:`fixed_point_status` finds
-    round-off. ``dq``, ``dp`` are workspace. Returns ``(p_k, sweeps)``, with
-    ``sweeps = -1`` if the iteration did not converge (after ``MAX_SWEEPS``).
+    round-off. ``dq``, ``dp``, ``p_new`` and ``smallest`` are workspace.
+    Returns the sweeps, ``-1`` if the iteration did not converge (after
+    ``MAX_SWEEPS``).
     """
-    p_k = p + k * dp
+    add_scaled(p_k, p, k, dp)  # p_k = p + k dp
     if separable:
-        return p_k, 0
-    smallest, status, sweeps = np.full(p.size, np.inf), 0, 0
+        return 0
+    smallest[:] = np.inf
+    status, sweeps = 0, 0
     while status == 0 and sweeps < MAX_SWEEPS:
         sweeps += 1
         hamilton(t, q, p_k, params, dq, dp)
         if damping_rate != 0.0:
             remove_damping(p_k, damping_rate, dp)
-        p_new = p + k * dp
+        add_scaled(p_new, p, k, dp)  # p_new = p + k dp(t, q, p_k)
         status = fixed_point_status(p_new, p_k, smallest)
-        p_k = p_new
-    return p_k, (sweeps if status == 1 else -1)
+        p_k[:] = p_new
+    return sweeps if status == 1 else -1
 
 
-@numba.njit(cache=True)
-def symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate):
+@kernel_function
+def symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate, work):
     """Symplectic Euler for a general ``H(t, q, p)``:
 
     ``p1 = p - h H_q(t, q, p1)``   (implicit in ``p1`` only)
     ``q1 = q + h H_p(t, q, p1)``
+
+    ``work`` holds ``6 n`` floats; ``q1, p1`` are returned as views into it.
     """
-    dq, dp = np.empty_like(q), np.empty_like(p)
+    n = q.size
+    dq, dp, q1 = vector(work, 0, n), vector(work, 1, n), vector(work, 2, n)
+    p1, p_new, smallest = vector(work, 3, n), vector(work, 4, n), vector(work, 5, n)
     hamilton(t, q, p, params, dq, dp)
     if damping_rate != 0.0:
         remove_damping(p, damping_rate, dp)
-    p1, sweeps = implicit_kick(hamilton, t, q, p, h, params, separable, damping_rate, dq, dp)
+    sweeps = implicit_kick(hamilton, t, q, p, h, params, separable, damping_rate, dq, dp, p1,
+                           p_new, smallest)
     if sweeps < 0:
         return q, p, -1, 1 + MAX_SWEEPS
     hamilton(t, q, p1, params, dq, dp)  # only dq = H_p is used
-    return q + h * dq, p1, sweeps, sweeps + 2
+    add_scaled(q1, q, h, dq)  # q1 = q + h dq
+    return q1, p1, sweeps, sweeps + 2
 
 
-@numba.njit(cache=True)
-def stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate):
+@kernel_function
+def stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate, work):
     """Stormer-Verlet for a general ``H(t, q, p)`` (the Lobatto IIIA-IIIB pair):
 
     ``p_half = p - h/2 H_q(t, q, p_half)``                          (implicit)
     ``q1 = q + h/2 [H_p(t, q, p_half) + H_p(t + h, q1, p_half)]``   (implicit)
     ``p1 = p_half - h/2 H_q(t + h, q1, p_half)``                    (explicit)
+
+    ``work`` holds ``8 n`` floats; ``q1, p1`` are returned as views into it.
     """
-    dq, dp = np.empty_like(q), np.empty_like(p)
+    n = q.size
+    dq, dp = vector(work, 0, n), vector(work, 1, n)
+    p_half, q1 = vector(work, 2, n), vector(work, 3, n)
+    p1, drift = vector(work, 4, n), vector(work, 5, n)
+    new, smallest = vector(work, 6, n), vector(work, 7, n)
     hamilton(t, q, p, params, dq, dp)
     if damping_rate != 0.0:
         remove_damping(p, damping_rate, dp)
-    p_half, sweeps = implicit_kick(hamilton, t, q, p, 0.5 * h, params, separable, damping_rate,
-                                   dq, dp)
+    sweeps = implicit_kick(hamilton, t, q, p, 0.5 * h, params, separable, damping_rate, dq, dp,
+                           p_half, new, smallest)
     if sweeps < 0:
         return q, p, -1, 1 + MAX_SWEEPS
     calls = 1 + sweeps
     hamilton(t, q, p_half, params, dq, dp)  # only dq = H_p is used
-    drift = q + 0.5 * h * dq
-    q1 = q + h * dq  # exact when H is separable, else the first guess
+    add_scaled(drift, q, 0.5 * h, dq)  # drift = q + h/2 dq
+    add_scaled(q1, q, h, dq)  # q1 = q + h dq: exact when H is separable, else the first guess
     calls += 1
     if not separable:
-        smallest, status, first_sweeps = np.full(q.size, np.inf), 0, sweeps
+        smallest[:] = np.inf
+        status, first_sweeps = 0, sweeps
         while status == 0 and sweeps - first_sweeps < MAX_SWEEPS:
             sweeps += 1
             hamilton(t + h, q1, p_half, params, dq, dp)
-            q_new = drift + 0.5 * h * dq
-            status = fixed_point_status(q_new, q1, smallest)
-            q1 = q_new
+            add_scaled(new, drift, 0.5 * h, dq)  # q1 <- drift + h/2 dq(t + h, q1, p_half)
+            status = fixed_point_status(new, q1, smallest)
+            q1[:] = new
         calls += sweeps - first_sweeps
         if status != 1:
             return q, p, -1, calls
     hamilton(t + h, q1, p_half, params, dq, dp)
     if damping_rate != 0.0:
         remove_damping(p_half, damping_rate, dp)
-    return q1, p_half + 0.5 * h * dp, sweeps, calls + 1
+    add_scaled(p1, p_half, 0.5 * h, dp)  # p1 = p_half + h/2 dp
+    return q1, p1, sweeps, calls + 1
 
 
-@jit_step
+@jit_step(memory=lambda n: 6 * n)
 def semi_implicit_euler_step(hamilton, acceleration, t, q, p, h, params, separable,
-                             damping_rate):
+                             damping_rate, memory):
     """Symplectic Euler in ``(q, p)``: :func:`symplectic_euler` of the Hamiltonian."""
-    return symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate)
+    return symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate, memory)
 
 
-@jit_step
-def leapfrog_step(hamilton, acceleration, t, q, p, h, params, separable, damping_rate):
+@jit_step(memory=lambda n: 8 * n)
+def leapfrog_step(hamilton, acceleration, t, q, p, h, params, separable, damping_rate, memory):
     """Stormer-Verlet in ``(q, p)``: :func:`stormer_verlet` of the Hamiltonian."""
-    return stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate)
+    return stormer_verlet(hamilton, t, q, p, h, params, separable, damping_rate, memory)
 
 
-@jit_step
-def conformal_euler_step(hamilton, acceleration, t, q, p, h, params, separable, damping_rate):
+@jit_step(memory=lambda n: 6 * n)
+def conformal_euler_step(hamilton, acceleration, t, q, p, h, params, separable, damping_rate,
+                         memory):
     """Conformal symplectic Euler [MP]: symplectic Euler, then the exact damping flow.
 
     ``(q, p) <- symplectic Euler of H``;  ``p <- exp(-gamma h) p``.
     """
     q1, p1, sweeps, calls = symplectic_euler(hamilton, t, q, p, h, params, separable,
-                                             damping_rate)
-    return q1, math.exp(-damping_rate * h) * p1, sweeps, calls
+                                             damping_rate, memory)
+    contraction = math.exp(-damping_rate * h)
+    for i in range(p1.size):
+        p1[i] = contraction * p1[i]
+    return q1, p1, sweeps, calls
 
 
-@jit_step
+@jit_step(memory=lambda n: 9 * n)
 def conformal_leapfrog_step(hamilton, acceleration, t, q, p, h, params, separable,
-                            damping_rate):
+                            damping_rate, memory):
     """Conformal Stormer-Verlet [MP]: half the damping, a leapfrog step of ``H``, half again.
 
     ``p <- exp(-gamma h/2) p``;  ``(q, p) <- Stormer-Verlet of H``;
@@ -471,37 +668,48 @@ def conformal_leapfrog_step(hamilton, acceleration, t, q, p, h, params, separabl
     symplectic, so each step contracts phase-space volume by exactly
     ``exp(-n gamma h)``, as the true flow does; symmetric, second order.
     """
-    contraction = math.exp(-0.5 * damping_rate * h)
-    q1, p1, sweeps, calls = stormer_verlet(hamilton, t, q, contraction * p, h, params,
-                                           separable, damping_rate)
-    return q1, contraction * p1, sweeps, calls
+    contraction, n = math.exp(-0.5 * damping_rate * h), q.size
+    contracted = memory[:n]
+    for i in range(n):
+        contracted[i] = contraction * p[i]
+    q1, p1, sweeps, calls = stormer_verlet(hamilton, t, q, contracted, h, params, separable,
+                                           damping_rate, memory[n:])
+    for i in range(n):
+        p1[i] = contraction * p1[i]
+    return q1, p1, sweeps, calls
 
 
 # --------------------------------------------------------------------------- the report's methods
-@jit_step
+@jit_step(memory=lambda n: 3 * n)
 def semi_implicit_euler_velocity_step(hamilton, acceleration, t, q, v, h, params, separable,
-                                      damping_rate):
+                                      damping_rate, memory):
     """The course report's version on ``(q, v)``: ``v1 = v + h a(t, q, v)``; ``q1 = q + h v1``."""
-    a = np.empty_like(v)
+    n = q.size
+    a, v1, q1 = vector(memory, 0, n), vector(memory, 1, n), vector(memory, 2, n)
     acceleration(t, q, v, params, a)
-    v1 = v + h * a
-    return q + h * v1, v1, 0, 1
+    add_scaled(v1, v, h, a)  # v1 = v + h a
+    add_scaled(q1, q, h, v1)  # q1 = q + h v1
+    return q1, v1, 0, 1
 
 
-@jit_step
-def leapfrog_velocity_step(hamilton, acceleration, t, q, v, h, params, separable, damping_rate):
+@jit_step(memory=lambda n: 4 * n)
+def leapfrog_velocity_step(hamilton, acceleration, t, q, v, h, params, separable, damping_rate,
+                           memory):
     """The course report's leapfrog on ``(q, v)``, written as kick-drift-kick:
 
     ``v_half = v + h/2 a(t, q, v)``; ``q1 = q + h v_half``;
     ``v1 = v_half + h/2 a(t + h, q1, v_half)``.
     Second order only when ``a`` does not depend on ``v``.
     """
-    a = np.empty_like(v)
+    n = q.size
+    a, v_half = vector(memory, 0, n), vector(memory, 1, n)
+    q1, v1 = vector(memory, 2, n), vector(memory, 3, n)
     acceleration(t, q, v, params, a)
-    v_half = v + 0.5 * h * a
-    q1 = q + h * v_half
+    add_scaled(v_half, v, 0.5 * h, a)  # v_half = v + h/2 a
+    add_scaled(q1, q, h, v_half)  # q1 = q + h v_half
     acceleration(t + h, q1, v_half, params, a)
-    return q1, v_half + 0.5 * h * a, 0, 2
+    add_scaled(v1, v_half, 0.5 * h, a)  # v1 = v_half + h/2 a
+    return q1, v1, 0, 2
 
 
 # ----------------------------------------------------------------------- variational integrators
@@ -572,70 +780,6 @@ def step_kernels(method: Method, field: HamiltonianField) -> tuple:
     return getattr(kernels, VARIATIONAL_SOLVERS[method.solver]), kernels.impulse
 
 
-# --------------------------------------------------------------------------- the time loop
-MATRIX = types.float64[:, ::1]
-RUN = types.void(
-    types.FunctionType(STEP), HamiltonFn, AccelerationFn, types.boolean, VECTOR, MATRIX, MATRIX,
-    types.float64, types.float64, types.int64, types.int64, types.int64, MATRIX,
-    types.float64[:, :, ::1], types.float64[:, :, ::1], types.int64[:, ::1],
-)
-#: Codes in ``stats[:, STATUS]`` after :func:`run`.
-RUNNING, NOT_FINITE, NOT_CONVERGED = 0, 1, 2
-STEPS, SWEEPS, CALLS, STATUS = 0, 1, 2, 3
-
-
-@numba.njit(cache=True)
-def _all_finite(x):
-    """``np.all(np.isfinite(x))`` without allocating a temporary array."""
-    for value in x:
-        if not math.isfinite(value):
-            return False
-    return True
-
-
-def _run(step, hamilton, acceleration, separable, damping_rates, q, p, t0, h, n_steps,
-         first_step, save_every, params, saved_q, saved_p, stats):
-    """Advance every row of ``(q, p)`` (shape ``(K, n)``) by ``n_steps`` steps, in place.
-
-    Steps are numbered globally from ``first_step + 1`` so that a long run can
-    be made of several calls (for a progress bar); step ``s`` goes from time
-    ``t0 + (s - 1) h`` to ``t0 + s h`` (computed from ``s``, not summed), and
-    row ``k``'s state after it is stored in ``saved_q[k, s // save_every]``
-    when ``save_every`` divides ``s``. ``params`` (shape ``(1, P)`` or
-    ``(K, P)``) and ``damping_rates`` (shape ``(1,)`` or ``(K,)``) are shared
-    or per row. ``stats[k]`` accumulates (steps done, solver sweeps,
-    vector-field calls, status); a row stops at a non-finite state or a solver
-    failure, keeping its status. Rows are independent; the caller may run
-    slices of them in parallel threads (the kernel releases the GIL).
-    """
-    shared = params.shape[0] == 1
-    for k in range(q.shape[0]):
-        if stats[k, STATUS] != RUNNING:
-            continue
-        row = 0 if shared else k
-        row_params, damping_rate = params[row], damping_rates[row]
-        qk, pk = q[k].copy(), p[k].copy()
-        for s in range(first_step + 1, first_step + n_steps + 1):
-            q1, p1, sweeps, calls = step(hamilton, acceleration, t0 + (s - 1) * h, qk, pk, h,
-                                         row_params, separable, damping_rate)
-            stats[k, CALLS] += calls
-            if sweeps < 0:
-                stats[k, STATUS] = NOT_CONVERGED
-                break
-            qk, pk = q1, p1
-            if not (_all_finite(qk) and _all_finite(pk)):
-                stats[k, STATUS] = NOT_FINITE
-                break
-            stats[k, STEPS] = s
-            stats[k, SWEEPS] += sweeps
-            if s % save_every == 0:
-                saved_q[k, s // save_every] = qk
-                saved_p[k, s // save_every] = pk
-        q[k], p[k] = qk, pk
-
-
-run = LazyKernel(RUN, _run, cache=True, nogil=True)
-
 
 # --------------------------------------------------------------------------- registry
 #: Values of :attr:`Method.applies_to`.
@@ -664,9 +808,10 @@ class Method:
         ``(q, p)`` or, for the course report's versions, ``(q, v)``.
     summary : str
         One line for tables and dropdowns.
-    kernel : LazyKernel
+    kernel : Step
         The step function (see the module docstring); ``kernel.py_func`` is
-        its Python source, ``kernel.compiled`` the machine code.
+        its Python source, ``kernel.memory(n)`` the floats it keeps per
+        trajectory; :mod:`pendulum_lab.loops` compiles it with each field.
     applies_to : {"any", "hamiltonian", "conformal", "lagrangian"}
         The fields it integrates: any; Hamiltonian ones (``damping_rate``
         zero); conformal ones (``damping_rate`` finite, zero included);
@@ -725,6 +870,9 @@ _REGISTRY = [
     # Four stages, order 8: far fewer steps where high accuracy is wanted.
     Method.from_tableau("glrk8", gauss_legendre_tableau(4),
                         "four-stage Gauss-Legendre collocation (order 8, implicit)"),
+    # Six stages, order 12: for tight tolerances over long runs.
+    Method.from_tableau("glrk12", gauss_legendre_tableau(6),
+                        "six-stage Gauss-Legendre collocation (order 12, implicit)"),
     Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
            "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
            semi_implicit_euler_velocity_step),
@@ -766,6 +914,7 @@ EULER_TABLEAU = METHODS["explicit_euler"].tableau
 RK4_TABLEAU = METHODS["rk4"].tableau
 GAUSS4_TABLEAU = METHODS["glrk4"].tableau
 GAUSS8_TABLEAU = METHODS["glrk8"].tableau
+GAUSS12_TABLEAU = METHODS["glrk12"].tableau
 
 MAIN_METHODS = ("explicit_euler", "semi_implicit_euler", "leapfrog", "rk4", "glrk4")
 

@@ -36,8 +36,17 @@ from collections.abc import Iterator
 import numpy as np
 
 from . import _validation as check
+from .loops import new_memory
 from .model import PendulumModel
-from .simulate import Trajectory, progress_bar, run_arguments, simulate, to_method_variables
+from .simulate import (
+    Trajectory,
+    _check_method_fits,
+    hamiltonian_field,
+    integrate,
+    progress_bar,
+    run_arguments,
+    to_method_variables,
+)
 
 __all__ = ["SegmentedRun", "segment_length", "simulate_segments"]
 
@@ -123,6 +132,11 @@ class SegmentedRun:
         self._theta = theta0.reshape(-1, model.n).copy()
         self._state = to_method_variables(self.model, method, self._theta,
                                            start.reshape(-1, model.n), given_momenta)
+        # What the method carries from step to step (its last stage slopes, the
+        # rounding it compensates): kept across segments, so that the segmented
+        # run is the one long run to the last bit.
+        self._memory = new_memory(method, self._theta.shape[0], model.n)
+        _check_method_fits(model, method, hamiltonian_field(self.model))
         self.members = np.arange(self._theta.shape[0])
         self.done = 0
         self.completed = True
@@ -142,10 +156,13 @@ class SegmentedRun:
         try:
             while self.done < self.n_steps and self.completed and len(self.members):
                 steps = min(self.segment_steps, self.n_steps - self.done)
-                segment = simulate(
-                    self.model, self._theta, **{given: self._state}, t_end=steps * self.dt,
-                    dt=self.dt, method=self.method, save_every=self.save_every, t0=self.time,
-                    progress=False,
+                # the field of the running members (a family's members keep their parameters)
+                segment = integrate(
+                    self.model, self.method, hamiltonian_field(self.model), self._theta.copy(),
+                    self._state.copy(),
+                    (len(self.members),), t_end=steps * self.dt, dt=self.dt, n_steps=steps,
+                    save_every=self.save_every, t0=self.time, progress=False,
+                    memory=self._memory,
                 )
                 self.done += steps
                 self.completed = segment.completed
@@ -171,6 +188,7 @@ class SegmentedRun:
                              f"running member), got {mask.shape}")
         self.members = self.members[mask]
         self._theta, self._state = self._theta[mask], self._state[mask]
+        self._memory = self._memory[mask]
         if self.model.shape:
             self.model = self.model.select(mask)
 
@@ -203,6 +221,7 @@ class SegmentedRun:
         moved = self.model.select(where) if self.model.shape else self.model
         self._state[where] = to_method_variables(moved, self.method, theta, p,
                                                   given_momenta=True)
+        self._memory[where] = 0.0  # a moved member starts afresh
 
 
 def simulate_segments(

@@ -12,7 +12,8 @@ References
 .. [HLW] E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*,
    2nd ed., Springer 2006: collocation and the conditions B, C, D
    (Sect. II.1.3), order conditions and rooted trees (Sect. III.1), the
-   symplecticity condition (Thm VI.4.3).
+   symplecticity condition (Thm VI.4.3), starting values for the stage
+   iteration (Sect. VIII.6.1).
 .. [B64] J. C. Butcher, "Implicit Runge-Kutta processes", Math. Comp. 18
    (1964) 50-64: ``B(p)``, ``C(q)``, ``D(r)`` with ``p <= q + r + 1`` and
    ``p <= 2q + 2`` give order ``p``.
@@ -24,9 +25,13 @@ import functools
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
+import mpmath
 import numpy as np
 
 __all__ = ["ButcherTableau", "Condition", "gauss_legendre_tableau", "rooted_trees"]
+
+#: Decimal digits of the exact arithmetic that builds the Gauss-Legendre tableaus.
+DIGITS = 40
 
 #: Coefficient identities are accepted up to this (the coefficients are
 #: rounded to double precision; a violated condition misses by far more).
@@ -143,14 +148,27 @@ class ButcherTableau:
         return self.b.size
 
     # ---- order conditions --------------------------------------------------------
-    def _stage_weights(self, tree) -> np.ndarray:
-        """The vector whose ``b``-weighted sum is the elementary weight of ``tree``."""
+    def _stage_weights(self, tree, known: dict | None = None) -> np.ndarray:
+        """The vector whose ``b``-weighted sum is the elementary weight of ``tree``.
+
+        ``known`` remembers the subtrees already done (trees of order 12 share
+        most of their subtrees; without it order 12 takes seconds).
+        """
+        if known is not None and tree in known:
+            return known[tree]
         weights = np.ones(self.stages)
         for child in tree:
-            weights = weights * (self.a @ self._stage_weights(child))
+            weights = weights * (self.a @ self._stage_weights(child, known))
+        if known is not None:
+            known[tree] = weights
         return weights
 
+    @functools.cached_property
+    def _known_weights(self) -> dict:
+        return {}
+
     @staticmethod
+    @functools.cache
     def _density(tree) -> int:
         product = 1
         for child in tree:
@@ -164,18 +182,42 @@ class ButcherTableau:
         elementary weight ``Phi`` and the density ``gamma`` [HLW, Sect. III.1].
         The method has order ``p`` when these hold for every order up to ``p``.
         """
-        trees = rooted_trees(order)
+        trees, known = rooted_trees(order), self._known_weights
         return _condition(
-            [self.b @ self._stage_weights(t) - 1.0 / self._density(t) for t in trees], tolerance
+            [self.b @ self._stage_weights(t, known) - 1.0 / self._density(t) for t in trees],
+            tolerance,
         )
 
     def _derived_order(self) -> int:
         # An s-stage method has order <= 2 s, an explicit one order <= s.
         bound = self.stages if self.explicit else 2 * self.stages
-        order = 0
+        order = self.simplified_order()
         while order < bound and self.order_condition(order + 1).holds:
             order += 1
         return order
+
+    def simplified_order(self) -> int:
+        """The order that the simplifying conditions alone guarantee [B64].
+
+        With ``p``, ``q``, ``r`` the largest integers (at most ``2 s``) for
+        which ``B(p)``, ``C(q)`` and ``D(r)`` hold, the method has order at least
+        ``min(p, q + r + 1, 2 q + 2)``. The order conditions of the rooted trees
+        are checked only above that: for the six-stage Gauss method they
+        would be 7,813 trees up to order 12.
+
+        Examples
+        --------
+        >>> gauss_legendre_tableau(2).simplified_order()  # B(4), C(2), D(2)
+        4
+        """
+        def largest(condition) -> int:
+            k = 0
+            while k < 2 * self.stages and condition(k + 1).holds:
+                k += 1
+            return k
+
+        p, q = largest(self.quadrature_condition), largest(self.stage_condition)
+        return min(p, q + largest(self.adjoint_stage_condition) + 1, 2 * q + 2)
 
     # ---- structure ---------------------------------------------------------------
     def symplectic_condition(self, tolerance: float = TOLERANCE) -> Condition:
@@ -228,6 +270,35 @@ class ButcherTableau:
         left = self.a.T @ (self.b[:, None] * powers)  # (s, r): sum_i b_i c_i^(k-1) a_ij
         return _condition(left - self.b[:, None] * (1.0 - self.c[:, None] ** k) / k, tolerance)
 
+    @functools.cached_property
+    def extrapolation(self) -> np.ndarray | None:
+        """``E_ij = l_j(1 + c_i)``, shape (s, s): the next step's stage slopes from this step's.
+
+        ``l_j`` is the Lagrange polynomial of node ``j``. The polynomial of
+        degree ``s - 1`` through this step's stage slopes ``K_j`` (for a
+        collocation method: the derivative of the collocation polynomial),
+        continued into the next step of the same size, gives the guess
+        ``K_i^0 = sum_j E_ij K_j`` for its stage equations, whose error is
+        ``O(h^s)`` instead of the ``O(h)`` of ``K_i^0 = f(y_n)``
+        [HLW, Sect. VIII.6.1]. None when nodes coincide (no such polynomial).
+
+        Examples
+        --------
+        >>> midpoint = ButcherTableau(a=[[0.5]], b=[1.0])
+        >>> midpoint.extrapolation  # one stage: the constant continues
+        array([[1.]])
+        """
+        c = self.c
+        if np.unique(c).size != self.stages:
+            return None
+        extrapolation = np.ones((self.stages, self.stages))
+        for j in range(self.stages):
+            for k in range(self.stages):
+                if k != j:
+                    extrapolation[:, j] *= (1.0 + c - c[k]) / (c[j] - c[k])
+        extrapolation.flags.writeable = False
+        return extrapolation
+
     @property
     def is_collocation(self) -> bool:
         """Distinct nodes and ``C(s)``: the method is collocation at the nodes ``c``."""
@@ -251,6 +322,9 @@ def gauss_legendre_tableau(stages: int) -> ButcherTableau:
     The nodes ``c`` are the zeros of the Legendre polynomial of degree
     ``stages`` moved to [0, 1]; ``a_ij`` integrates the Lagrange polynomial
     of node ``j`` from 0 to ``c_i`` and ``b_j`` from 0 to 1 [HLW, Sect. II.1.3].
+    Everything is computed with :data:`DIGITS` decimal digits (``mpmath``) and
+    rounded once at the end: in double precision the Lagrange polynomials of
+    six nodes already lose the row sums ``sum_j a_ij = c_i`` at 1e-14.
 
     Examples
     --------
@@ -259,15 +333,50 @@ def gauss_legendre_tableau(stages: int) -> ButcherTableau:
     (6, True, True)
     """
     stages = _positive("stages", stages)
-    x, _ = np.polynomial.legendre.leggauss(stages)
-    c = (x + 1.0) / 2.0
-    a, b = np.empty((stages, stages)), np.empty(stages)
-    for j in range(stages):
-        others = np.delete(c, j)
-        if others.size:
-            lagrange = np.polynomial.Polynomial.fromroots(others) / np.prod(c[j] - others)
-        else:  # one stage: the constant 1
-            lagrange = np.polynomial.Polynomial([1.0])
-        integral = lagrange.integ()  # zero at t = 0
-        a[:, j], b[j] = integral(c), integral(1.0)
-    return ButcherTableau(a=a, b=b, c=c)
+    with mpmath.workdps(DIGITS):
+        c = [(x + 1) / 2 for x in _legendre_zeros(stages)]
+        a, b = [[None] * stages for _ in range(stages)], [None] * stages
+        for j in range(stages):
+            # the Lagrange polynomial of node j, as coefficients of t^0, t^1, ...
+            lagrange = [mpmath.mpf(1)]
+            for k in range(stages):
+                if k != j:
+                    lagrange = _times_linear(lagrange, c[k], c[j] - c[k])
+            # its integral from 0, evaluated at x
+            def integral(x, coefficients=lagrange):
+                return mpmath.fsum(q * x ** (m + 1) / (m + 1) for m, q in enumerate(coefficients))
+
+            b[j] = integral(mpmath.mpf(1))
+            for i in range(stages):
+                a[i][j] = integral(c[i])
+        return ButcherTableau(a=[[float(x) for x in row] for row in a],
+                              b=[float(x) for x in b], c=[float(x) for x in c])
+
+
+def _legendre_zeros(degree: int) -> list:
+    """The zeros of the Legendre polynomial ``P_degree`` on [-1, 1], ascending, to full precision.
+
+    Newton's method from Tricomi's approximation ``cos(pi (k - 1/4) / (degree + 1/2))``,
+    with ``(x^2 - 1) P'_n(x) = n (x P_n(x) - P_(n-1)(x))``.
+    """
+    zeros = []
+    for k in range(1, degree + 1):
+        x = mpmath.cos(mpmath.pi * (k - mpmath.mpf(1) / 4) / (degree + mpmath.mpf(1) / 2))
+        for _ in range(100):
+            value = mpmath.legendre(degree, x)
+            slope = degree * (x * value - mpmath.legendre(degree - 1, x)) / (x * x - 1)
+            step = value / slope
+            x -= step
+            if abs(step) < mpmath.mpf(10) ** (-DIGITS):
+                break
+        zeros.append(x)
+    return sorted(zeros)
+
+
+def _times_linear(coefficients: list, root, scale) -> list:
+    """The coefficients of ``p(t) (t - root) / scale`` from those of ``p`` (lowest first)."""
+    out = [mpmath.mpf(0)] * (len(coefficients) + 1)
+    for m, q in enumerate(coefficients):
+        out[m + 1] += q / scale
+        out[m] -= q * root / scale
+    return out

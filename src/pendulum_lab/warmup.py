@@ -3,8 +3,9 @@
 Numba compiles each kernel the first time it runs on a machine (a few seconds
 each) and keeps the machine code on disk. This module sits on top of the
 layers so that it can reach every kernel: the vector fields and the step
-functions of every registered method, the discrete Legendre transforms of
-the variational methods, and the standard map's loop.
+functions of every registered method compiled into the time loop of each
+field (:mod:`pendulum_lab.loops`), the discrete Legendre transforms of the
+variational methods, and the standard map's loop.
 """
 
 from __future__ import annotations
@@ -15,9 +16,15 @@ import numpy as np
 
 from . import _validation as check
 from .geometric.standard_map import first_crossings
-from .integrators import CONFORMAL_METHODS, METHODS, VARIATIONAL_METHODS, get_method
+from .integrators import (
+    CONFORMAL_METHODS,
+    METHODS,
+    VARIATIONAL_METHODS,
+    get_method,
+    unsuitability,
+)
 from .model import driven_pendulum, n_pendulum
-from .simulate import simulate
+from .simulate import hamiltonian_field, simulate
 
 __all__ = ["warm_up"]
 
@@ -57,8 +64,12 @@ def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
         jobs = tqdm(jobs, desc="compiling kernels", unit="kernel")
     for n, name in jobs:
         simulate(n_pendulum(n), np.full(n, 0.1), np.zeros(n), t_end=0.01, dt=0.01, method=name)
-    if 1 in ns:  # the step kernels take any field: one run compiles the forced field
-        simulate(driven_pendulum(), [0.1], [0.0], t_end=0.01, dt=0.01, method=names[0])
+    if 1 in ns:  # each (field, method) pair has its own compiled loop: the forced field too
+        driven = driven_pendulum()
+        field = hamiltonian_field(driven)
+        for name in names:
+            if unsuitability(get_method(name), field) is None:
+                simulate(driven, [0.1], [0.0], t_end=0.01, dt=0.01, method=name)
     if methods is None:
         first_crossings([1.0], [0.1], [0.0], 1)
     return time.perf_counter() - start
