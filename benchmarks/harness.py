@@ -77,6 +77,12 @@ class Config:
     flip_t_end: float = 10.0
     limit_members: int = 4000  # item 6: ensemble verified against the C loop
     limit_steps: int = 200
+    chain_rounds: int = 3  # item 7: long chains
+    chain_first_use: tuple = (10, 20, 50)
+    chain_printed: tuple = (3, 4, 5)
+    chain_evaluations: int = 200_000
+    chain_sizes: tuple = (3, 5, 10, 20, 50, 100, 200)
+    chain_step_budget: int = 20_000  # steps x links per timed run
 
 
 FULL = Config("full")
@@ -98,6 +104,12 @@ QUICK = replace(
     flip_size=40,
     flip_t_end=5.0,
     limit_members=400,
+    chain_rounds=1,
+    chain_first_use=(20,),
+    chain_printed=(3,),
+    chain_evaluations=20_000,
+    chain_sizes=(3, 10, 50),
+    chain_step_budget=5_000,
 )
 SMOKE = replace(
     FULL,
@@ -124,6 +136,12 @@ SMOKE = replace(
     flip_t_end=1.0,
     limit_members=16,
     limit_steps=10,
+    chain_rounds=1,
+    chain_first_use=(10,),
+    chain_printed=(3,),
+    chain_evaluations=100,
+    chain_sizes=(3, 10, 20),
+    chain_step_budget=200,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

@@ -119,7 +119,7 @@ def main(argv=None) -> int:
         "--only",
         action="append",
         metavar="NAME",
-        help=f"run only this item (repeatable): {', '.join(suite.ITEMS)} or 1-6",
+        help=f"run only this item (repeatable): {', '.join(suite.ITEMS)} or 1-{len(suite.ITEMS)}",
     )
     parser.add_argument(
         "--out", type=Path, metavar="FILE", help="write the Markdown table here (and nowhere else)"

@@ -1,4 +1,4 @@
-"""The benchmark suite of issue 7: six items, each a ratio measured side by side.
+"""The benchmark suite of issues 7 and 17: each item a ratio measured side by side.
 
 One file per item (``item_slider.py`` ... ``item_c_limit.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
@@ -33,6 +33,7 @@ from harness import (
 from item_c_limit import bench_c_limit
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
+from item_long_chains import bench_long_chains
 from item_long_run import bench_long_run
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
@@ -63,6 +64,7 @@ ITEMS = {
     "report_glrk4": (4, bench_report_glrk4, False),
     "ensemble": (5, bench_ensemble, True),
     "c_limit": (6, bench_c_limit, True),
+    "long_chains": (7, bench_long_chains, False),
 }
 
 
@@ -75,7 +77,9 @@ def resolve(names) -> list[str]:
     for name in names:
         key = by_number.get(str(name), str(name).replace("-", "_"))
         if key not in ITEMS:
-            raise ValueError(f"unknown benchmark {name!r}; choose from {list(ITEMS)} or 1-6")
+            raise ValueError(
+                f"unknown benchmark {name!r}; choose from {list(ITEMS)} or 1-{len(ITEMS)}"
+            )
         keys.append(key)
     return sorted(set(keys), key=lambda k: ITEMS[k][0])
 
