@@ -81,10 +81,10 @@ def bench_long_chains(cfg: Config) -> Section:
         assert np.isclose(_evaluate(printed, theta, p, params, 3),
                           _evaluate(looped, theta, p, params, 3), rtol=1e-12)
         count = cfg.chain_evaluations
-        found = interleave(
-            {name: (lambda k=kernel: timed(_evaluate, k, theta, p, params, count)[0])
-             for name, kernel in (("printed", printed), ("looped", looped))},
-            cfg.chain_rounds)
+        calls = {name: (_evaluate, kernel, theta, p, params, count)
+                 for name, kernel in (("printed", printed), ("looped", looped))}
+        found = interleave({name: (lambda args=args: timed(*args)[0])
+                            for name, args in calls.items()}, cfg.chain_rounds)
         printed_s, looped_s = (med(found[name]) / count for name in ("printed", "looped"))
         data["evaluation"][n] = {"printed": printed_s, "looped": looped_s}
         rows.append(Row("7", f"Hamilton's equations, {n} links, one evaluation",
@@ -105,7 +105,8 @@ def bench_long_chains(cfg: Config) -> Section:
             theta0, omega0 = np.linspace(0.5, 0.1, n), np.zeros(n)
             steps = max(10, cfg.chain_step_budget // n)
 
-            def run(chain=chain, theta0=theta0, omega0=omega0, steps=steps):
+            def run(chain=chain, theta0=theta0, omega0=omega0, steps=steps, dt=dt,
+                    method=method):
                 return pl.simulate(chain, theta0, omega0, t_end=steps * dt, dt=dt,
                                    method=method, keep="final", progress=False)
 
