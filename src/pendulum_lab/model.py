@@ -268,14 +268,22 @@ class PendulumModel:
         >>> pl.driven_pendulum().replace(drive_amplitude=1.5).drive_amplitude
         1.5
         """
-        arguments = dict(masses=self.masses, lengths=self.lengths, g=self.g,
-                         damping=self.damping, drive_amplitude=self.drive_amplitude,
-                         drive_frequency=self.drive_frequency)
+        arguments = self._arguments()
         unknown = set(changes) - set(arguments)
         if unknown:
             raise ValueError(f"cannot replace {sorted(unknown)}: the arguments are "
                              f"{list(arguments)}")
         return PendulumModel(self.n, **(arguments | changes))
+
+    def _arguments(self) -> dict:
+        """The constructor's arguments after ``n``."""
+        return dict(masses=self.masses, lengths=self.lengths, g=self.g, damping=self.damping,
+                    drive_amplitude=self.drive_amplitude, drive_frequency=self.drive_frequency)
+
+    def __reduce__(self):
+        # Pickled as its constructor call (for Dask workers, see pendulum_lab.cluster): the
+        # compiled functions it holds cannot be pickled, and a worker builds its own.
+        return functools.partial(PendulumModel, self.n, **self._arguments()), ()
 
     # ---- symbolic views (parameters symbolic) -----------------------------
     @property
