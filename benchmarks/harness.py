@@ -83,6 +83,9 @@ class Config:
     chain_evaluations: int = 200_000
     chain_sizes: tuple = (3, 5, 10, 20, 50, 100, 200)
     chain_step_budget: int = 20_000  # steps x links per timed run
+    cluster_size: int = 1000  # item 8: flip-time map on a Dask LocalCluster
+    cluster_t_end: float = 10.0
+    cluster_workers: int = 2
 
 
 FULL = Config("full")
@@ -110,6 +113,8 @@ QUICK = replace(
     chain_evaluations=20_000,
     chain_sizes=(3, 10, 50),
     chain_step_budget=5_000,
+    cluster_size=150,
+    cluster_t_end=5.0,
 )
 SMOKE = replace(
     FULL,
@@ -142,6 +147,8 @@ SMOKE = replace(
     chain_evaluations=100,
     chain_sizes=(3, 10, 20),
     chain_step_budget=200,
+    cluster_size=8,
+    cluster_t_end=0.5,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

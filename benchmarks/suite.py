@@ -31,6 +31,7 @@ from harness import (
     verdict,
 )
 from item_c_limit import bench_c_limit
+from item_distributed import bench_distributed
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
 from item_long_chains import bench_long_chains
@@ -65,6 +66,7 @@ ITEMS = {
     "ensemble": (5, bench_ensemble, True),
     "c_limit": (6, bench_c_limit, True),
     "long_chains": (7, bench_long_chains, False),
+    "distributed": (8, bench_distributed, False),
 }
 
 

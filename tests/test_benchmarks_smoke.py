@@ -56,7 +56,16 @@ def well_formed(suite, section, number):
 
 @pytest.mark.parametrize(
     "key",
-    ["slider", "first_use", "long_run", "report_glrk4", "ensemble", "c_limit", "long_chains"],
+    [
+        "slider",
+        "first_use",
+        "long_run",
+        "report_glrk4",
+        "ensemble",
+        "c_limit",
+        "long_chains",
+        "distributed",
+    ],
 )
 def test_each_item_runs_and_returns_rows(suite, key):
     if suite.ITEMS[key][2] and shutil.which(suite.c_yardstick.COMPILER) is None:

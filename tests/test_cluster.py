@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import pendulum_lab as pl
-from pendulum_lab import chaos
+from pendulum_lab import chaos, segments
 from pendulum_lab.cluster import check_client, map_members
 from pendulum_lab.integrators import Method, get_method
 
@@ -31,7 +31,10 @@ def client():
             yield connected
 
 
-def test_flip_time_map_on_the_cluster_is_the_local_map(client):
+def test_flip_time_map_on_the_cluster_is_the_local_map(client, monkeypatch):
+    # Little memory per segment: the whole batch and a chunk of it are then run in
+    # segments of different lengths (as a large map is), which must not matter.
+    monkeypatch.setattr(segments, "SEGMENT_FLOATS", 8000)
     local = chaos.flip_time_map(DP, size=14, t_end=2.0)
     remote = chaos.flip_time_map(DP, size=14, t_end=2.0, client=client, chunk_size=9)
     assert np.isfinite(local.time).sum() > 10  # some cells flip: the map is not trivial

@@ -205,6 +205,7 @@ def flip_time_map(
     start = time.perf_counter()
     flip.flat[cells] = map_members(
         flip_times, (theta,), client=client, chunk_size=chunk_size, label="flip-time map",
+        progress=progress,
         args=(model, t_end, dt, portable_method(method, client),
               progress if client is None else False))
     return FlipMap(
@@ -234,12 +235,16 @@ def flip_times(theta, model: PendulumModel, t_end: float, dt: float, method,
         return flip
     run = simulate_segments(model, theta, np.zeros_like(theta), t_end=t_end, dt=dt,
                             method=method, progress=progress, label="flip-time map")
+    first_step = 0
     for segment in run:
         require_finite(segment, "flip_time_map")
         # An arm flips when the larger |theta_i| passes pi (upwards).
         height = np.max(np.abs(segment.theta), axis=-1)
         flips = find_crossings(height, direction=1, level=np.pi).first()
-        flip[run.members[flips.member]] = segment.t[0] + (flips.step + flips.fraction()) * dt
+        # Counted in steps from the start: segments end where the batch's size puts them,
+        # and the time must not depend on that (a chunk of the batch gives the same).
+        flip[run.members[flips.member]] = (first_step + flips.step + flips.fraction()) * dt
+        first_step += len(segment.t) - 1
         # Cells that have flipped leave the ensemble.
         stay = np.ones(len(run.members), dtype=bool)
         stay[flips.member] = False

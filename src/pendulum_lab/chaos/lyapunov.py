@@ -190,6 +190,7 @@ def lyapunov_benettin(
     start = time.perf_counter()
     running = map_members(
         benettin_running, (theta0, p0), client=client, chunk_size=chunk_size, label="Benettin",
+        progress=progress,
         args=(model, dt, every, intervals, portable_method(method, client), delta, seed,
               progress if client is None else False))
     t = (np.arange(intervals) + 1) * every * dt
