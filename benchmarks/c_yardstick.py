@@ -1,33 +1,36 @@
-"""Benchmark item 6: the double pendulum's RK4 loop in C, the yardstick for items 1 and 5.
+"""The RK4 loop in C, the yardstick for items 1, 5 and 7 (and item 6 itself).
 
 The C source is generated at benchmark time from pendulum_lab's own SymPy
 equations with SymPy's C code printer (``sympy.ccode``, common subexpressions
 shared with ``sympy.cse``), compiled with ``gcc -O2 ... -lm`` into a temporary
 folder and run as a separate program that times itself with ``clock_gettime``.
-No binary is ever committed.
+No binary is ever committed. Chains of one or two links, conservative or
+forced (damping and drive), are supported: the double pendulum for items 1, 5
+and 6, the damped, driven pendulum for item 8.
 
 Which form of the equations
 ---------------------------
 The Hamiltonian form, factored as pendulum_lab's compiled kernels factor it:
-``dq = M(q)^-1 p`` (the 2 x 2 mass matrix printed from
-``derive_chain(2).mass_matrix`` and solved in closed form) and
-``dp = dL/dq`` evaluated at ``omega = dq`` (printed from
-``derive_chain(2).dlagrangian_dq``). RK4 runs on the canonical state
-``(theta, p)``, exactly as ``pl.simulate(..., method="rk4")`` does, with the
+``dq = M(q)^-1 p`` (the mass matrix printed from ``chain.mass_matrix`` and
+solved in closed form) and ``dp = dL/dq (+ Q)`` evaluated at ``omega = dq``
+(printed from ``chain.dlagrangian_dq`` and, for a forced chain, the
+generalized forces ``chain.generalized_forces``, which depend on the time).
+RK4 runs on the canonical state ``(theta, p)``, exactly as
+``pl.simulate(..., method="rk4")`` does, with the same stage times and the
 same association of every floating-point sum, so the two programs do the same
 arithmetic and their end states can be compared to round-off. Parameters are
 read at run time (not compile-time constants), as the compiled kernels
 receive them, so the compiler cannot fold them away.
 
-The program::
+The program (``P`` parameters, ``n`` links)::
 
-    prog single N_STEPS DT REPS THETA1 THETA2 P1 P2
-    prog ensemble N_STEPS DT REPS INFILE OUTFILE
+    prog PAR_1 .. PAR_P single N_STEPS DT REPS THETA_1 .. THETA_n P_1 .. P_n
+    prog PAR_1 .. PAR_P ensemble N_STEPS DT REPS INFILE OUTFILE
 
 ``single`` prints one ``seconds WALL cpu CPU`` line per repetition (each from the same
-initial state) and the final state; ``ensemble`` reads ``K x 4`` float64 rows
-``(theta1, theta2, p1, p2)``, advances every row ``N_STEPS`` steps one after
-the other on one thread, and writes the final rows to ``OUTFILE``.
+initial state, at t = 0) and the final state; ``ensemble`` reads ``K x 2n`` float64 rows
+``(theta, p)``, advances every row ``N_STEPS`` steps one after the other on one
+thread, and writes the final rows to ``OUTFILE``.
 """
 
 from __future__ import annotations
@@ -56,26 +59,39 @@ def _declarations(targets: list[str], exprs, mapping: dict, prefix: str) -> list
 
 
 def c_source(chain) -> str:
-    """The C program for a two-link chain (``pl.derive_chain(2)``)."""
-    if chain.n != 2:
-        raise ValueError(f"`chain` must have two links (the double pendulum), got n = {chain.n}")
-    th = sp.symbols("th0:2", real=True)
-    w = sp.symbols("w0:2", real=True)
-    par = sp.symbols("par0:5", real=True)
+    """The C program for a chain of one or two links (``pl.derive_chain(n, forced)``)."""
+    n = chain.n
+    if n not in (1, 2):
+        raise ValueError(f"`chain` must have one or two links, got n = {n}")
+    th = sp.symbols(f"th0:{n}", real=True)
+    w = sp.symbols(f"w0:{n}", real=True)
+    par = sp.symbols(f"par0:{len(chain.parameters)}", real=True)
     mapping = dict(zip(chain.q, th)) | dict(zip(chain.omega, w)) | dict(zip(chain.parameters, par))
+    mapping[chain.t] = sp.Symbol("t", real=True)
     mass = chain.mass_matrix
-    mass_lines = [f"double {name};" for name in ("m00", "m01", "m11")]
-    mass_lines += _declarations(
-        ["m00", "m01", "m11"], [mass[0, 0], mass[0, 1], mass[1, 1]], mapping, "a"
-    )
-    force_lines = _declarations(["dp[0]", "dp[1]"], list(chain.dlagrangian_dq), mapping, "b")
-    lines = [*mass_lines, "", *_solve_lines(), "", *force_lines]
+    entries = {"m00": mass[0, 0]} if n == 1 else {"m00": mass[0, 0], "m01": mass[0, 1],
+                                                  "m11": mass[1, 1]}
+    mass_lines = [f"double {name};" for name in entries]
+    mass_lines += _declarations(list(entries), list(entries.values()), mapping, "a")
+    rates = chain.dlagrangian_dq
+    if chain.forced:  # damping and drive torques: dp = dL/dq + Q
+        rates = rates + chain.generalized_forces
+    force_lines = _declarations([f"dp[{i}]" for i in range(n)], list(rates), mapping, "b")
+    lines = [*mass_lines, "", *_solve_lines(n), "", *force_lines]
     body = "\n".join("    " + line if line else "" for line in lines)
-    return _TEMPLATE.replace("@HAMILTON_BODY@", body)
+    unpack = [f"const double th{i} = q[{i}];" for i in range(n)]
+    unpack += [f"const double par{i} = PARAMS[{i}]; (void)par{i};" for i in range(len(par))]
+    return (_TEMPLATE.replace("@HAMILTON_BODY@", body)
+            .replace("@UNPACK@", "\n".join("    " + line for line in unpack))
+            .replace("@N@", str(n)).replace("@NPAR@", str(len(par)))
+            .replace("@WHAT@", ("the driven, damped " if chain.forced else "the ")
+                     + ("simple pendulum" if n == 1 else "double pendulum")))
 
 
-def _solve_lines() -> list[str]:
-    # dq = M^-1 p by Cramer's rule, the closed form the compiled kernels use for n = 2.
+def _solve_lines(n: int) -> list[str]:
+    # dq = M^-1 p in the closed form the compiled kernels use (Cramer's rule for n = 2).
+    if n == 1:
+        return ["dq[0] = p[0] / m00;", "const double w0 = dq[0];"]
     return [
         "const double det = m00 * m11 - m01 * m01;",
         "dq[0] = (m11 * p[0] - m01 * p[1]) / det;",
@@ -86,38 +102,39 @@ def _solve_lines() -> list[str]:
 
 
 _TEMPLATE = r"""/* Generated by benchmarks/c_yardstick.py from pendulum_lab's SymPy equations.
-   RK4 on the double pendulum in canonical variables (theta, p). Do not edit. */
+   RK4 on @WHAT@ in canonical variables (theta, p). Do not edit. */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 
-/* (m1, m2, l1, l2, g), set at run time so that nothing is constant-folded. */
-static double PARAMS[5];
+#define N @N@
+#define NPAR @NPAR@
 
-static void hamilton(const double *q, const double *p, double *dq, double *dp)
+/* The chain's parameters, set at run time so that nothing is constant-folded. */
+static double PARAMS[NPAR];
+
+static void hamilton(double t, const double *q, const double *p, double *dq, double *dp)
 {
-    const double th0 = q[0], th1 = q[1];
-    const double par0 = PARAMS[0], par1 = PARAMS[1], par2 = PARAMS[2], par3 = PARAMS[3],
-                 par4 = PARAMS[4];
-    (void)par0; (void)par1; (void)par2; (void)par3; (void)par4;
+    (void)t;
+@UNPACK@
 @HAMILTON_BODY@
 }
 
-/* Classical RK4; every sum is associated as in pendulum_lab's explicit_rk. */
-static void rk4_step(double *q, double *p, double h)
+/* Classical RK4; stage times and every sum as in pendulum_lab's explicit_rk. */
+static void rk4_step(double t, double *q, double *p, double h)
 {
-    double k1q[2], k1p[2], k2q[2], k2p[2], k3q[2], k3p[2], k4q[2], k4p[2], sq[2], sp[2];
+    double k1q[N], k1p[N], k2q[N], k2p[N], k3q[N], k3p[N], k4q[N], k4p[N], sq[N], sp[N];
     int m;
-    hamilton(q, p, k1q, k1p);
-    for (m = 0; m < 2; ++m) { sq[m] = q[m] + h * 0.5 * k1q[m]; sp[m] = p[m] + h * 0.5 * k1p[m]; }
-    hamilton(sq, sp, k2q, k2p);
-    for (m = 0; m < 2; ++m) { sq[m] = q[m] + h * 0.5 * k2q[m]; sp[m] = p[m] + h * 0.5 * k2p[m]; }
-    hamilton(sq, sp, k3q, k3p);
-    for (m = 0; m < 2; ++m) { sq[m] = q[m] + h * k3q[m]; sp[m] = p[m] + h * k3p[m]; }
-    hamilton(sq, sp, k4q, k4p);
-    for (m = 0; m < 2; ++m) {
+    hamilton(t, q, p, k1q, k1p);
+    for (m = 0; m < N; ++m) { sq[m] = q[m] + h * 0.5 * k1q[m]; sp[m] = p[m] + h * 0.5 * k1p[m]; }
+    hamilton(t + 0.5 * h, sq, sp, k2q, k2p);
+    for (m = 0; m < N; ++m) { sq[m] = q[m] + h * 0.5 * k2q[m]; sp[m] = p[m] + h * 0.5 * k2p[m]; }
+    hamilton(t + 0.5 * h, sq, sp, k3q, k3p);
+    for (m = 0; m < N; ++m) { sq[m] = q[m] + h * k3q[m]; sp[m] = p[m] + h * k3p[m]; }
+    hamilton(t + 1.0 * h, sq, sp, k4q, k4p);
+    for (m = 0; m < N; ++m) {
         q[m] = q[m] + h * (1.0 / 6.0) * k1q[m] + h * (1.0 / 3.0) * k2q[m]
                + h * (1.0 / 3.0) * k3q[m] + h * (1.0 / 6.0) * k4q[m];
         p[m] = p[m] + h * (1.0 / 6.0) * k1p[m] + h * (1.0 / 3.0) * k2p[m]
@@ -132,8 +149,9 @@ static double seconds_between(struct timespec a, struct timespec b)
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: prog m1 m2 l1 l2 g single N_STEPS DT REPS THETA1 THETA2 P1 P2\n"
-                    "       prog m1 m2 l1 l2 g ensemble N_STEPS DT REPS INFILE OUTFILE\n");
+    fprintf(stderr, "usage: prog PARAMS... single N_STEPS DT REPS THETA... P...\n"
+                    "       prog PARAMS... ensemble N_STEPS DT REPS INFILE OUTFILE\n"
+                    "(%d parameters, %d links)\n", NPAR, N);
     return 2;
 }
 
@@ -143,51 +161,54 @@ int main(int argc, char **argv)
     long n_steps, s, k;
     int reps, r, i;
     double h;
-    if (argc < 10) return usage();
-    for (i = 0; i < 5; ++i) PARAMS[i] = atof(argv[1 + i]);
-    n_steps = atol(argv[7]);
-    h = atof(argv[8]);
-    reps = atoi(argv[9]);
-    if (argv[6][0] == 's' && argc == 14) {
-        double q[2], p[2];
+    const int a = 1 + NPAR; /* argv[a] is the mode */
+    if (argc < a + 4) return usage();
+    for (i = 0; i < NPAR; ++i) PARAMS[i] = atof(argv[1 + i]);
+    n_steps = atol(argv[a + 1]);
+    h = atof(argv[a + 2]);
+    reps = atoi(argv[a + 3]);
+    if (argv[a][0] == 's' && argc == a + 4 + 2 * N) {
+        double y[2 * N];
         for (r = 0; r < reps; ++r) {
-            q[0] = atof(argv[10]); q[1] = atof(argv[11]);
-            p[0] = atof(argv[12]); p[1] = atof(argv[13]);
+            for (i = 0; i < 2 * N; ++i) y[i] = atof(argv[a + 4 + i]);
             clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
             clock_gettime(CLOCK_MONOTONIC, &t0);
-            for (s = 0; s < n_steps; ++s) rk4_step(q, p, h);
+            for (s = 0; s < n_steps; ++s) rk4_step((double)s * h, y, y + N, h);
             clock_gettime(CLOCK_MONOTONIC, &t1);
             clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
             printf("seconds %.9e cpu %.9e\n", seconds_between(t0, t1), seconds_between(c0, c1));
         }
-        printf("final %.17g %.17g %.17g %.17g\n", q[0], q[1], p[0], p[1]);
+        printf("final");
+        for (i = 0; i < 2 * N; ++i) printf(" %.17g", y[i]);
+        printf("\n");
         return 0;
     }
-    if (argv[6][0] == 'e' && argc == 12) {
-        FILE *f = fopen(argv[10], "rb");
+    if (argv[a][0] == 'e' && argc == a + 6) {
+        FILE *f = fopen(argv[a + 4], "rb");
         long size, rows;
         double *initial, *state;
-        if (!f) { perror(argv[10]); return 1; }
+        if (!f) { perror(argv[a + 4]); return 1; }
         fseek(f, 0, SEEK_END); size = ftell(f); fseek(f, 0, SEEK_SET);
-        rows = size / (long)(4 * sizeof(double));
+        rows = size / (long)(2 * N * sizeof(double));
         initial = malloc((size_t)size); state = malloc((size_t)size);
-        if (!initial || !state || fread(initial, sizeof(double), (size_t)(4 * rows), f)
-                                      != (size_t)(4 * rows)) return 1;
+        if (!initial || !state || fread(initial, sizeof(double), (size_t)(2 * N * rows), f)
+                                      != (size_t)(2 * N * rows)) return 1;
         fclose(f);
         for (r = 0; r < reps; ++r) {
-            for (k = 0; k < 4 * rows; ++k) state[k] = initial[k];
+            for (k = 0; k < 2 * N * rows; ++k) state[k] = initial[k];
             clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
             clock_gettime(CLOCK_MONOTONIC, &t0);
             for (k = 0; k < rows; ++k) {
-                double *y = state + 4 * k;
-                for (s = 0; s < n_steps; ++s) rk4_step(y, y + 2, h);
+                double *y = state + 2 * N * k;
+                for (s = 0; s < n_steps; ++s) rk4_step((double)s * h, y, y + N, h);
             }
             clock_gettime(CLOCK_MONOTONIC, &t1);
             clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
             printf("seconds %.9e cpu %.9e\n", seconds_between(t0, t1), seconds_between(c0, c1));
         }
-        f = fopen(argv[11], "wb");
-        if (!f || fwrite(state, sizeof(double), (size_t)(4 * rows), f) != (size_t)(4 * rows))
+        f = fopen(argv[a + 5], "wb");
+        if (!f || fwrite(state, sizeof(double), (size_t)(2 * N * rows), f)
+                      != (size_t)(2 * N * rows))
             return 1;
         fclose(f);
         free(initial); free(state);
@@ -208,12 +229,13 @@ def compiler_version() -> str:
 
 @dataclass(frozen=True)
 class CLoop:
-    """A compiled C RK4 loop for one double pendulum (parameters fixed at build)."""
+    """A compiled C RK4 loop for one chain of ``n`` links (parameters fixed at build)."""
 
     executable: Path
     source: Path
     params: tuple
     command: str
+    n: int = 2
 
     def _run(self, args: list[str]) -> list[str]:
         out = subprocess.run(
@@ -227,25 +249,26 @@ class CLoop:
         return out.stdout.splitlines()
 
     def single(self, theta0, p0, n_steps: int, dt: float, reps: int = 1) -> CRun:
-        """Run one trajectory ``reps`` times, each from ``(theta0, p0)`` (shape (2,) each)."""
-        theta0, p0 = np.asarray(theta0, float), np.asarray(p0, float)
+        """Run one trajectory ``reps`` times, each from ``(theta0, p0)`` (shape (n,) each)."""
+        theta0 = np.asarray(theta0, float).reshape(self.n)
+        p0 = np.asarray(p0, float).reshape(self.n)
         args = [str(int(n_steps)), repr(float(dt)), str(int(reps))]
         lines = self._run(["single", *args, *(repr(float(x)) for x in (*theta0, *p0))])
         final = np.array([float(x) for x in lines[-1].split()[1:]])
-        return CRun(*_timings(lines), final[:2], final[2:])
+        return CRun(*_timings(lines), final[: self.n], final[self.n :])
 
     def ensemble(self, theta0, p0, n_steps: int, dt: float, reps: int = 1) -> CRun:
-        """Run rows ``(theta0[k], p0[k])`` (shape (K, 2) each) one after the other, one thread."""
-        theta0 = np.asarray(theta0, float).reshape(-1, 2)
-        p0 = np.asarray(p0, float).reshape(-1, 2)
+        """Run rows ``(theta0[k], p0[k])`` (shape (K, n) each) one after the other, one thread."""
+        theta0 = np.asarray(theta0, float).reshape(-1, self.n)
+        p0 = np.asarray(p0, float).reshape(-1, self.n)
         rows = np.ascontiguousarray(np.concatenate([theta0, p0], axis=1))
         infile = self.executable.with_name("ensemble_in.bin")
         outfile = self.executable.with_name("ensemble_out.bin")
         rows.tofile(infile)
         args = [str(int(n_steps)), repr(float(dt)), str(int(reps)), str(infile), str(outfile)]
         lines = self._run(["ensemble", *args])
-        final = np.fromfile(outfile).reshape(-1, 4)
-        return CRun(*_timings(lines), final[:, :2], final[:, 2:])
+        final = np.fromfile(outfile).reshape(-1, 2 * self.n)
+        return CRun(*_timings(lines), final[:, : self.n], final[:, self.n :])
 
 
 @dataclass(frozen=True)
@@ -268,17 +291,18 @@ def _timings(lines: list[str]) -> tuple[list, list]:
 
 
 def build(model, workdir) -> CLoop:
-    """Generate, write and compile the C loop for ``model`` (a double pendulum) in ``workdir``."""
+    """Generate, write and compile the C loop for ``model`` (one or two links) in ``workdir``."""
     if shutil.which(COMPILER) is None:
         raise RuntimeError(f"`{COMPILER}` was not found: the C yardstick needs a C compiler")
     workdir = Path(workdir)
-    source = workdir / "dp_rk4.c"
-    executable = workdir / "dp_rk4"
+    stem = ("driven_" if model.forced else "") + ("sp_rk4" if model.n == 1 else "dp_rk4")
+    source = workdir / f"{stem}.c"
+    executable = workdir / stem
     source.write_text(c_source(model.chain))
     command = [COMPILER, *FLAGS, "-o", str(executable), str(source), "-lm"]
     out = subprocess.run(command, capture_output=True, text=True, check=False)
     if out.returncode != 0:
         raise RuntimeError(f"compiling the C yardstick failed:\n{out.stderr}")
-    params = (*model.masses, *model.lengths, model.g)
+    params = tuple(float(x) for x in model.parameter_values.values())
     shown = " ".join([COMPILER, *FLAGS, "-o", executable.name, source.name, "-lm"])
-    return CLoop(executable, source, tuple(float(x) for x in params), shown)
+    return CLoop(executable, source, params, shown, model.n)

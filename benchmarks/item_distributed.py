@@ -1,4 +1,4 @@
-"""Item 8: a flip-time map on a Dask ``LocalCluster`` against the same map in this process.
+"""Item 11: a flip-time map on a Dask ``LocalCluster`` against the same map in this process.
 
 The map of issue 17 (1000 x 1000 cells to t = 10 in the full configuration)
 runs once in this process and once on a local cluster of worker processes
@@ -27,8 +27,8 @@ def bench_distributed(cfg: Config) -> Section:
     try:
         import distributed
     except ImportError:
-        row = Row("8", f"{title}, Dask LocalCluster", "-", "-", "-", "-", "not available")
-        return Section("distributed", "8. Ensembles on Dask", [row],
+        row = Row("11", f"{title}, Dask LocalCluster", "-", "-", "-", "-", "not available")
+        return Section("distributed", "11. Ensembles on Dask", [row],
                        ["dask.distributed is not installed: pip install "
                         "\"pendulum_lab[cluster]\"."], {})
     dp = pl.double_pendulum()
@@ -59,13 +59,13 @@ def bench_distributed(cfg: Config) -> Section:
         "identical": identical,
     }
     rows = [
-        Row("8", f"{title}, LocalCluster of {workers} workers, per worker (wall)",
+        Row("11", f"{title}, LocalCluster of {workers} workers, per worker (wall)",
             f"{remote_rate:.4g} cells/s", f"in-process {local_rate:.4g} cells/s per core",
             f"{remote_rate / local_rate:.2f}x", "cluster/in-process (info)", "info"),
-        Row("8", f"{title}, LocalCluster, per CPU-second",
+        Row("11", f"{title}, LocalCluster, per CPU-second",
             f"{remote_cpu_rate:.4g} cells/CPU-s", f"in-process {local_cpu_rate:.4g} cells/CPU-s",
             f"{remote_cpu_rate / local_cpu_rate:.2f}x", "cluster/in-process (info)", "info"),
-        Row("8", f"{title}, same map on the cluster", "bit for bit" if identical else "differs",
+        Row("11", f"{title}, same map on the cluster", "bit for bit" if identical else "differs",
             "in-process map", "-", "identical", "PASS" if identical else "MISS"),
     ]
     details = [
@@ -79,4 +79,4 @@ def bench_distributed(cfg: Config) -> Section:
         f"os.cpu_count(); a worker runs its chunk on as many threads as the machine has cores, "
         f"so on this machine the workers share its cores.",
     ]
-    return Section("distributed", "8. Ensembles on Dask", rows, details, data)
+    return Section("distributed", "11. Ensembles on Dask", rows, details, data)

@@ -1,4 +1,4 @@
-"""Item 7: long chains (issue 17): first use for n = 10, 20, 50 and the cost per step against n.
+"""Item 10: long chains (issue 17): first use for n = 10, 20, 50 and the cost per step against n.
 
 Three measurements, each side by side in this run:
 
@@ -64,7 +64,7 @@ def bench_long_chains(cfg: Config) -> Section:
         seconds = med(samples[n], "wall")
         data["first_use"][n] = seconds
         target = FIRST_USE_TARGETS.get(n)
-        rows.append(Row("7", f"first use, n_pendulum({n}) + 1 s glrk4, fresh process",
+        rows.append(Row("10", f"first use, n_pendulum({n}) + 1 s glrk4, fresh process",
                         fmt_time(seconds), f"n = 2: {fmt_time(base)}", f"{seconds / base:.2f}x",
                         f"< {target:g} s (issue 17)" if target else "(info)",
                         verdict(seconds, target) if target else "info"))
@@ -87,7 +87,7 @@ def bench_long_chains(cfg: Config) -> Section:
                             for name, args in calls.items()}, cfg.chain_rounds)
         printed_s, looped_s = (med(found[name]) / count for name in ("printed", "looped"))
         data["evaluation"][n] = {"printed": printed_s, "looped": looped_s}
-        rows.append(Row("7", f"Hamilton's equations, {n} links, one evaluation",
+        rows.append(Row("10", f"Hamilton's equations, {n} links, one evaluation",
                         f"looped {fmt_time(looped_s)}", f"printed {fmt_time(printed_s)}",
                         f"{looped_s / printed_s:.2f}x", "looped/printed (info)", "info"))
     details.append(f"One evaluation: {cfg.chain_evaluations} calls of `hamilton` from a compiled "
@@ -125,7 +125,7 @@ def bench_long_chains(cfg: Config) -> Section:
             "n": list(cfg.chain_sizes), "per_step": costs, "evaluations_per_step": evaluations,
             "slope_per_step": slope_step, "slope_per_evaluation": slope_eval}
         table = ", ".join(f"n={n}: {fmt_time(c)}" for n, c in zip(cfg.chain_sizes, costs))
-        rows.append(Row("7", f"{method} cost per step against n ({cfg.chain_sizes[0]}.."
+        rows.append(Row("10", f"{method} cost per step against n ({cfg.chain_sizes[0]}.."
                              f"{cfg.chain_sizes[-1]} links)",
                         f"slope {slope_step:.2f} per step, {slope_eval:.2f} per evaluation",
                         "n^2 (build M) .. n^3 (dense solve)", f"{costs[-1] / costs[0]:.1f}x",
@@ -136,4 +136,4 @@ def bench_long_chains(cfg: Config) -> Section:
                        + f". Slopes of the log-log fit over n >= 10: per step {slope_step:.2f}, "
                        f"per evaluation {slope_eval:.2f}. The ratio column: the largest chain "
                        f"against the smallest, per step.")
-    return Section("long_chains", "7. Long chains", rows, details, data)
+    return Section("long_chains", "10. Long chains", rows, details, data)

@@ -1,6 +1,6 @@
-"""The benchmark suite of issues 7 and 17: each item a ratio measured side by side.
+"""The benchmark suite (issue 7; items 7-11 from issues 12, 13, 16, 17): ratios side by side.
 
-One file per item (``item_slider.py`` ... ``item_c_limit.py``) and a shared
+One file per item (``item_slider.py`` ... ``item_live.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
 machine's description). This module lists the items and runs them;
 ``benchmarks/run.py`` is the command-line front end; see
@@ -30,14 +30,17 @@ from harness import (
     machine_description,
     verdict,
 )
+from item_bifurcation import bench_bifurcation
 from item_c_limit import bench_c_limit
 from item_distributed import bench_distributed
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
+from item_live import bench_live
 from item_long_chains import bench_long_chains
 from item_long_run import bench_long_run
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
+from item_variational import bench_variational
 
 __all__ = [
     "COLUMNS",
@@ -65,8 +68,11 @@ ITEMS = {
     "report_glrk4": (4, bench_report_glrk4, False),
     "ensemble": (5, bench_ensemble, True),
     "c_limit": (6, bench_c_limit, True),
-    "long_chains": (7, bench_long_chains, False),
-    "distributed": (8, bench_distributed, False),
+    "variational": (7, bench_variational, False),
+    "bifurcation": (8, bench_bifurcation, False),
+    "live": (9, bench_live, False),
+    "long_chains": (10, bench_long_chains, False),
+    "distributed": (11, bench_distributed, False),
 }
 
 

@@ -31,9 +31,7 @@ course_repository_branch = "main"
 # Widget outputs that have no static picture yet, per page (see docs/README.md, "Static
 # pictures"). The build fails if a page has a different number of them, so this list must shrink
 # as explorers gain their picture, and nothing new can slip in.
-course_widgets_without_picture = {
-    "notebooks/11_double_pendulum_chaos": 1,
-}
+course_widgets_without_picture = {}
 # ------------------------------------------------------------------------------------------
 
 project = "pendulum_lab"

@@ -63,6 +63,8 @@ def well_formed(suite, section, number):
         "report_glrk4",
         "ensemble",
         "c_limit",
+        "variational",
+        "bifurcation",
         "long_chains",
         "distributed",
     ],
@@ -72,6 +74,20 @@ def test_each_item_runs_and_returns_rows(suite, key):
         pytest.skip("no C compiler: the C yardstick cannot be built")
     (section,) = suite.run_items(suite.SMOKE, [key], log=lambda _: None)
     well_formed(suite, section, suite.ITEMS[key][0])
+
+
+def test_live_item_counts_the_bytes_of_one_run(suite):
+    """Item 9 in the smoke configuration: the kernel rows only (no browser), and the byte
+    count is exactly the run's float32 arrays."""
+    (section,) = suite.run_items(suite.SMOKE, ["live"], log=lambda _: None)
+    well_formed(suite, section, suite.ITEMS["live"][0])
+    assert [row.result for row in section.rows][-1] == "not available"  # no browser in smoke
+    kernel = section.data["kernel"]
+    assert kernel["steps"] == 2000 and kernel["messages"] == 1
+    # 2001 states of (2 angles, 3 energies, 1 energy error) as float32.
+    assert kernel["buffer_bytes"] == 2001 * 6 * 4
+    # The matplotlib simulator's frames: 20 s at 20 frames per second, and many more bytes.
+    assert kernel["frames"] == 401 and kernel["image_bytes"] > 10 * kernel["buffer_bytes"]
 
 
 def test_a_failing_item_becomes_an_error_row(suite, monkeypatch):
@@ -103,6 +119,25 @@ def test_c_loop_does_the_same_arithmetic_as_simulate(suite, tmp_path):
     # Negative control: one step fewer is a different end state.
     q_short = loop.single(theta0, dp.momenta(theta0, omega0), 299, 0.01).theta
     assert np.max(np.abs(q_short - traj.theta[-1])) > 1e-6
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler")
+def test_c_loop_of_the_driven_pendulum_does_the_same_arithmetic(suite, tmp_path):
+    import numpy as np
+
+    import pendulum_lab as pl
+
+    model = pl.driven_pendulum()  # forced: the drive depends on the time of each stage
+    loop = suite.c_yardstick.build(model, tmp_path)
+    theta0 = np.array([[0.2], [1.0]])
+    p0 = model.momenta(theta0, np.zeros_like(theta0))
+    run = loop.ensemble(theta0, p0, 500, 0.05)
+    traj = pl.simulate(model, theta0, p0=p0, t_end=25.0, dt=0.05, method="rk4", keep="final")
+    assert np.max(np.abs(run.theta - traj.theta[-1])) <= 1e-9
+    assert np.max(np.abs(run.p - traj.p[-1])) <= 1e-9
+    # Negative control: the conservative pendulum's C loop is a different motion.
+    free = suite.c_yardstick.build(pl.simple_pendulum(g=1.0), tmp_path)
+    assert np.max(np.abs(free.ensemble(theta0, p0, 500, 0.05).theta - traj.theta[-1])) > 1e-3
 
 
 def test_search_finds_the_largest_passing_value(long_run):

@@ -5,6 +5,8 @@ Run lengths are chosen for the compiled core (the whole file takes well under
 a minute on two cores).
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -140,7 +142,7 @@ def test_poincare_crossings_lie_on_the_surface_to_1e_10():
     assert np.max(sec.residual) < 1e-10
     # Negative control: the nearest step is not on the surface.
     nearest = chaos.poincare_section(
-        DP, theta0, omega0, t_end=50.0, dt=0.01, method="glrk4", refine=False
+        DP, theta0, omega0, t_end=50.0, dt=0.01, method="glrk4", landing="nearest"
     )
     assert len(nearest.t) == len(sec.t)
     assert np.max(np.abs(nearest.theta[:, 0])) > 1e-10
@@ -183,7 +185,7 @@ def test_poincare_crossings_agree_with_scipy_event_location():
     assert np.max(np.abs(sec.t - t_ref)) < 1e-6
     assert np.max(np.abs(sec.p - p_ref)) < 1e-5
     nearest = chaos.poincare_section(
-        DP, theta0[:1], omega0[:1], t_end=20.0, dt=0.01, method="glrk4", refine=False
+        DP, theta0[:1], omega0[:1], t_end=20.0, dt=0.01, method="glrk4", landing="nearest"
     )
     assert np.max(np.abs(nearest.t - t_ref)) > 1e-4  # negative control
 
@@ -266,3 +268,58 @@ def test_linearised_and_full_motion_part_later_for_smaller_amplitudes():
     assert -2.5 < slope < -1.5
     # Negative control: at 0.4 rad the difference is large.
     assert np.max(cmp.difference[:, -1]) > 0.1
+
+
+# --------------------------------------------------------------------------- per energy
+def test_section_spread_lies_on_one_energy_surface():
+    theta0, omega0 = chaos.section_spread(DP, 16.0, orbits=7)
+    assert theta0.shape == (7, 2) and np.all(theta0[:, 0] == 0.0)
+    assert np.max(np.abs(DP.energy(theta0, omega0) - 16.0)) < 1e-12
+    # Negative control: releases at rest near (2.0, 2.5) spread over several joules.
+    releases = np.array(CHAOTIC) + 0.1 * np.random.default_rng(1).uniform(-1, 1, (16, 2))
+    assert np.ptp(DP.energy(releases, np.zeros_like(releases))) > 2.0
+    with pytest.raises(ValueError, match="`energy` must lie above"):
+        chaos.section_spread(DP, -40.0)
+    with pytest.raises(ValueError, match="double pendulum"):
+        chaos.section_spread(SP, 1.0)
+
+
+def test_lyapunov_by_energy_separates_regular_and_chaotic_surfaces():
+    scan = chaos.lyapunov_by_energy(DP, [-20.0, 16.0], orbits=4, t_end=60.0, dt=0.01,
+                                    method="rk4")
+    assert scan.energy.tolist() == [-20.0] * 4 + [16.0] * 4
+    assert np.max(np.abs(DP.energy(scan.theta0, scan.omega0) - scan.energy)) < 1e-12
+    low, high = scan.per_energy()
+    assert low.chaotic == 0 and np.isnan(low.mean)  # tori everywhere at -20 J
+    assert high.chaotic == high.orbits == 4 and high.mean > 0.8
+    assert high.standard_error < 0.2 * high.mean
+    # The same orbits by lyapunov_benettin directly.
+    direct = chaos.lyapunov_benettin(DP, scan.theta0, scan.omega0, t_end=60.0, dt=0.01,
+                                     method="rk4")
+    assert np.array_equal(direct.exponent, scan.exponent)
+    # Negative control: a threshold above every estimate calls every orbit regular.
+    everything = dataclasses.replace(scan, threshold=10.0)
+    assert [row.chaotic for row in everything.per_energy()] == [0, 0]
+    with pytest.raises(ValueError, match="`energies` must lie above"):
+        chaos.lyapunov_by_energy(DP, [-30.0], t_end=1.0)
+
+
+def test_separation_between_two_runs():
+    one_ulp = [np.nextafter(2.0, 3.0), 2.5]
+    assert one_ulp[0] > 2.0 and 2.0 + 1e-16 == 2.0  # a 1e-16 perturbation would be none
+    base = pl.simulate(DP, CHAOTIC, REST, t_end=12.0, dt=0.005, method="rk4")
+    ulp = chaos.separation_between(base, pl.simulate(DP, one_ulp, REST, t_end=12.0, dt=0.005,
+                                                     method="rk4"))
+    half = pl.simulate(DP, CHAOTIC, REST, t_end=12.0, dt=0.0025, method="rk4", save_every=2)
+    truncation = chaos.separation_between(base, half)
+    assert ulp.delta == pytest.approx(4.44e-16, rel=1e-2) and truncation.delta == 0.0
+    at_1s = np.searchsorted(base.t, 1.0)
+    # after 1 s RK4's truncation error at dt = 0.005 is about 1e-6, far above round-off
+    assert 1e-7 < truncation.distance[at_1s] < 1e-5
+    assert truncation.distance[at_1s] > 1e6 * ulp.distance[at_1s]
+    # both grow: chaos amplifies any difference (negative control: equal runs stay equal)
+    assert ulp.distance[-1] > 1e6 * ulp.delta
+    assert np.all(chaos.separation_between(base, base).distance == 0.0)
+    with pytest.raises(ValueError, match="same times"):
+        chaos.separation_between(base, pl.simulate(DP, CHAOTIC, REST, t_end=12.0, dt=0.0025,
+                                                   method="rk4"))

@@ -223,3 +223,22 @@ def test_running_as_root_adds_allow_root_once(course):
     assert "--allow-root" not in cli.lab_command(course, as_root=False)  # negative control
     twice = cli.lab_command(course, as_root=True, extra=["--allow-root"])
     assert twice.count("--allow-root") == 1
+
+
+def test_warm_up_reaches_the_variational_kernels_and_the_standard_map():
+    script = (
+        "import pendulum_lab as pl, sys\n"
+        "from pendulum_lab import codegen\n"
+        "from pendulum_lab.geometric import standard_map\n"
+        "pl.warm_up(ns=(1,), methods=None if sys.argv[1] == 'all' else ['rk4'], progress=False)\n"
+        "print(len(standard_map._first_crossings.signatures),"
+        " codegen.load_discrete_kernels.cache_info().currsize)\n"
+    )
+    counts = {}
+    for which in ("all", "rk4"):
+        done = subprocess.run([sys.executable, "-c", script, which], capture_output=True,
+                              text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        counts[which] = tuple(int(x) for x in done.stdout.split())
+    assert counts["all"] == (1, 2)  # the map's loop and both rules' discrete kernels
+    assert counts["rk4"] == (0, 0)  # negative control: one method compiles neither

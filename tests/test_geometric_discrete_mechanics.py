@@ -93,3 +93,16 @@ def test_three_links_derive_cheaply_and_bad_input():
         dm.discrete_lagrangian(0, "midpoint")
     with pytest.raises(ValueError, match="`parameters`"):
         dm.reference_step(1, "midpoint", {}, [0.1], [0.0], 0.1)
+
+
+def test_discrete_momenta_bad_input():
+    with pytest.raises(ValueError, match="`q0` and `q1`"):
+        dm.discrete_momenta(2, "midpoint", DP.parameter_values, [0.1, 0.2], [0.1], 0.1)
+    with pytest.raises(ValueError, match="`h`"):
+        dm.discrete_momenta(1, "midpoint", SP.parameter_values, [0.1], [0.2], 0.0)
+    with pytest.raises(TypeError, match="`parameters`"):
+        dm.discrete_momenta(1, "midpoint", [1.0, 1.0, 9.81], [0.1], [0.2], 0.1)
+    # negative control: a batch of steps is fine
+    start, end = dm.discrete_momenta(1, "midpoint", SP.parameter_values, np.zeros((4, 1)),
+                                     np.full((4, 1), 0.1), 0.1)
+    assert start.shape == end.shape == (4, 1)

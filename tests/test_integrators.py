@@ -300,3 +300,30 @@ def test_simple_pendulum_symplectic_euler_is_the_textbook_update():
     p_expected = p - h * 9.81 * np.sin(q)
     assert np.allclose(p1, p_expected, rtol=0, atol=1e-15)
     assert np.allclose(q1, q + h * p_expected, rtol=0, atol=1e-15)
+
+
+def test_stage_iteration_contracts_in_proportion_to_the_step():
+    from pendulum_lab.analysis import stage_contraction
+    from pendulum_lab.integrators import GAUSS4_TABLEAU, RK4_TABLEAU
+
+    dp = pl.double_pendulum()
+    steps = np.geomspace(0.001, 0.05, 7)
+    runs = [stage_contraction(dp, [2.0, 2.5], [0.0, 0.0], dt=h) for h in steps]
+    measured = np.array([r.contraction for r in runs])
+    slope = np.polyfit(np.log(steps), np.log(measured), 1)[0]
+    assert 0.85 < slope < 1.15  # the factor per sweep is proportional to h
+    # and close to h rho(A) rho(df/dy), rho(A) = sqrt(3)/6 for two-stage Gauss-Legendre
+    predicted = np.array([r.predicted for r in runs])
+    assert np.all(np.abs(np.log(measured / predicted)) < np.log(1.5))
+    rho_a = np.max(np.abs(np.linalg.eigvals(GAUSS4_TABLEAU.a)))
+    rho_f = np.max(np.abs(np.linalg.eigvals(dp.jacobian([2.0, 2.5], dp.momenta([2.0, 2.5],
+                                                                                [0.0, 0.0])))))
+    assert rho_a == pytest.approx(np.sqrt(3) / 6)
+    assert runs[0].predicted == pytest.approx(steps[0] * rho_a * rho_f)
+    # Negative control: RK4's strictly lower triangular A is nilpotent, so the same iteration
+    # ends exactly (increment 0) after at most four sweeps instead of contracting.
+    rk4 = stage_contraction(dp, [2.0, 2.5], [0.0, 0.0], dt=0.01, tableau=RK4_TABLEAU)
+    assert rk4.predicted == 0.0 and len(rk4.increments) <= 4 and rk4.increments[-1] == 0.0
+    assert len(runs[3].increments) > 4
+    with pytest.raises(TypeError, match="`tableau`"):
+        stage_contraction(dp, [2.0, 2.5], [0.0, 0.0], dt=0.01, tableau="gauss")

@@ -182,3 +182,22 @@ def test_twenty_links_keep_their_energy_with_gl4_and_not_with_euler():
     assert gl4.completed
     assert np.max(np.abs(gl4.relative_energy_error)) < 1e-7
     assert np.max(np.abs(euler.relative_energy_error)) > 1e-3  # negative control
+
+
+def test_a_family_of_long_chains_gives_each_member_its_own_parameters():
+    base = pl.n_pendulum(3, damping=0.1, drive_amplitude=0.5, drive_frequency=1.3)
+    family = base.family(damping=[0.0, 0.2, 0.4], drive_amplitude=[0.5, 1.0, 0.0])
+    rng = np.random.default_rng(4)
+    theta, p = rng.uniform(-2, 2, (3, 3)), rng.normal(size=(3, 3))
+    omega = family.velocities(theta, p)
+    together = (family.accelerations(theta, omega, 0.4), family.jacobian(theta, p, 0.4),
+                family.energy(theta, omega))
+    for k in range(3):
+        member = family.member(k)
+        alone = (member.accelerations(theta[k], omega[k], 0.4),
+                 member.jacobian(theta[k], p[k], 0.4), member.energy(theta[k], omega[k]))
+        for got, expected in zip(together, alone):
+            assert np.allclose(got[k], expected, rtol=1e-13, atol=1e-13)
+    # Negative control: every member with the first member's parameters differs.
+    first = family.member(0)
+    assert not np.allclose(first.accelerations(theta, omega, 0.4), together[0], rtol=1e-6)

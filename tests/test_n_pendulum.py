@@ -92,5 +92,9 @@ def test_chain_costs_reports_each_chain():
     row = rows[0]
     assert row.derivation > 0 and row.build >= 0 and row.first_simulation > 0
     assert 0 < row.per_step < row.first_simulation
+    assert row.evaluations_per_step == 4  # RK4: four stages, nothing implicit
+    assert row.per_evaluation * row.evaluations_per_step == pytest.approx(row.per_step)
+    chain = pl.derive_chain(3)
+    assert row.operations == sp.count_ops([*chain.mass_matrix, *chain.forcing])
     with pytest.raises(ValueError, match="`ns`"):
         timing.chain_costs((0,))

@@ -221,3 +221,70 @@ def test_rest_state_at_energy():
         assert float(DP.potential_energy(theta)) == pytest.approx(energy, abs=1e-10)
     with pytest.raises(ValueError, match="energy"):
         analysis.rest_state_at_energy(DP, 30.0)
+
+
+def test_lyapunov_energy_and_landing_error_figures():
+    import dataclasses
+
+    from pendulum_lab import chaos
+
+    scan = chaos.lyapunov_by_energy(DP, [-20.0, 16.0], orbits=2, t_end=20.0, method="rk4",
+                                    threshold=0.3)
+    ax = plotting.plot_lyapunov_energy(scan).axes[0]
+    from matplotlib.collections import PathCollection
+
+    dots = [c for c in ax.collections if isinstance(c, PathCollection)]
+    assert sum(len(c.get_offsets()) for c in dots) == 4  # every orbit drawn once
+    means = ax.lines[0].get_ydata()
+    assert np.isnan(means[0]) and means[1] == pytest.approx(scan.exponent[2:].mean())
+    # Negative control: with every orbit regular there is no mean to draw.
+    regular = plotting.plot_lyapunov_energy(dataclasses.replace(scan, threshold=10.0)).axes[0]
+    assert np.all(np.isnan(regular.lines[0].get_ydata()))
+    theta, omega = chaos.section_spread(DP, -5.0, orbits=4)
+    errors = chaos.landing_errors(DP, theta, omega, dt=0.01, method="rk4", landing="henon")
+    line = errors.plot().axes[0].lines[0]
+    assert np.array_equal(np.sort(line.get_xdata()), np.sort(errors.speed))
+    assert set(line.get_ydata()) == set(errors.state_error)
+
+
+# --------------------------------------------------------------------------- geometric figures
+def test_geometric_figures_draw_their_results_into_given_axes():
+    from pendulum_lab.geometric import standard_map
+
+    fig, axes = plotting.new_figure(1, 3)
+    threshold = standard_map.transport_threshold((10, 100), ks=np.linspace(1.5, 2.5, 5), orbits=4)
+    assert plotting.plot_transport_threshold(threshold, ax=axes[0]) is fig
+    points = axes[0].lines[0]
+    np.testing.assert_array_equal(points.get_xdata(), threshold.iterations)
+    np.testing.assert_array_equal(points.get_ydata(), threshold.thresholds)
+    scipy = analysis.scipy_run(SP, [1.0], [0.0], t_end=5.0, rtol=1e-6)
+    fixed = pl.simulate(SP, [1.0], [0.0], t_end=5.0, dt=0.05, method="leapfrog")
+    assert plotting.plot_adaptive_energy([scipy, fixed], ax=axes[1]) is fig
+    labels = [t.get_text() for t in axes[1].get_legend().get_texts()]
+    assert labels == ["DOP853, rtol 1e-06", "leapfrog, dt = 0.05"]
+    np.testing.assert_array_equal(axes[1].lines[0].get_ydata(), scipy.energy_error)
+    assert plotting.plot_level_sets(SP.hamiltonian_value, (-3, 3), (-8, 8), ax=axes[2]) is fig
+    assert axes[2].get_xlabel() == "θ (rad)" and axes[2].get_ylabel() == "p (kg m²/s)"
+    with pytest.raises(TypeError, match="`ax`"):
+        plotting.plot_transport_threshold(threshold, ax="left")
+
+
+def test_geometric_panels_use_the_grid_helper():
+    from pendulum_lab.geometric import standard_map
+
+    portraits = {k: standard_map.iterate([np.pi], [0.5], k, 50) for k in (0.5, 1.2)}
+    fig = plotting.plot_standard_map(portraits, ncols=2)
+    assert len(fig.axes) == 2
+    assert [ax.get_title() for ax in fig.axes] == ["K = 0.5", "K = 1.2 (> K_c)"]
+    _, axes = plotting.new_figure(1, 2)
+    assert plotting.plot_standard_map(portraits, axes=axes) is axes[0].figure
+    with pytest.raises(ValueError, match="at least 2 matplotlib Axes"):
+        plotting.plot_standard_map(portraits, axes=axes[:1])
+
+
+def test_axis_labels_come_from_one_table():
+    assert plotting.axis_label("theta", plotting.link_label(1, 2)) == "θ₂ (rad)"
+    assert plotting.axis_label("p") == "p (kg m²/s)"
+    assert set(plotting.QUANTITIES) >= {"t", "theta", "omega", "p"}
+    with pytest.raises(ValueError, match="`quantity` must be one of"):
+        plotting.axis_label("speed")

@@ -256,7 +256,7 @@ def test_work_precision_of_rk4_and_dop853():
     assert dop[1].energy_error < 1e-3 * dop[0].energy_error
     assert dop[1].evaluations > dop[0].evaluations
     with pytest.raises(ValueError, match="`rtol` must be in"):
-        analysis.dop853_run(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, rtol=1.0)
+        analysis.scipy_run(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, rtol=1.0)
 
 
 def test_markdown_table_rejects_a_column_the_rows_lack():
@@ -288,7 +288,7 @@ def test_plot_energy_error_growth_draws_the_running_maximum():
         pl.simulate(dp, [2.0, 2.5], [0.0, 0.0], t_end=2.0, dt=0.01, method=name)
         for name in ("leapfrog", "leapfrog_velocity")
     ]
-    runs.append(analysis.dop853_run(dp, [2.0, 2.5], [0.0, 0.0], t_end=2.0, rtol=1e-6))
+    runs.append(analysis.scipy_run(dp, [2.0, 2.5], [0.0, 0.0], t_end=2.0, rtol=1e-6))
     ax = plotting.plot_energy_error_growth(runs).axes[0]
     assert [line.get_linestyle() for line in ax.lines] == ["-", "--", ":"]
     for line, run in zip(ax.lines, runs):
@@ -297,7 +297,7 @@ def test_plot_energy_error_growth_draws_the_running_maximum():
         assert np.all(np.diff(line.get_ydata()) >= 0)
     assert ax.get_yscale() == "log"
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert labels == ["leapfrog", "leapfrog_velocity", "DOP853, rtol = 1e-06"]
+    assert labels == ["leapfrog", "leapfrog_velocity", "DOP853, rtol 1e-06"]
     with pytest.raises(ValueError, match="one entry per run"):
         plotting.plot_energy_error_growth(runs, labels=["only one"])
 
@@ -316,3 +316,56 @@ def test_plot_work_precision_one_line_per_method():
         plotting.plot_work_precision(points, x="steps")
     with pytest.raises(ValueError, match="`repeats` must be an integer >= 1"):
         analysis.work_precision(sp, [1.0], [0.0], t_end=1.0, dts=[0.1], method="rk4", repeats=0)
+
+
+def test_work_precision_measures_the_global_error_against_the_reference():
+    dp = pl.double_pendulum()
+    start = ([1.0, 1.5], [0.0, 0.0])
+    reference = analysis.reference_solution(dp, *start, t_end=2.0)
+    rk4 = analysis.work_precision(dp, *start, t_end=2.0, dts=[0.02, 0.01], method="rk4",
+                                  reference=reference)
+    # the global error at T of a fourth-order method: 2^4 smaller at half the step
+    assert 10 < rk4[0].state_error / rk4[1].state_error < 24
+    by_hand = pl.simulate(dp, *start, t_end=2.0, dt=0.01, method="rk4")
+    assert rk4[1].state_error == analysis.global_error(by_hand.theta[-1], by_hand.omega[-1],
+                                                       reference)
+    # Negative control: a second-order method's error only falls 2^2 per halving.
+    leapfrog = analysis.work_precision(dp, *start, t_end=2.0, dts=[0.02, 0.01],
+                                       method="leapfrog", reference=reference)
+    assert 2.5 < leapfrog[0].state_error / leapfrog[1].state_error < 6
+    # The reference defaults to DOP853 at t_end; tight DOP853 runs agree with it.
+    dop = analysis.dop853_work_precision(dp, *start, t_end=2.0, rtols=[1e-6, 1e-11])
+    assert dop[1].state_error < 1e-7 < dop[0].state_error
+    with pytest.raises(ValueError, match="whole number of steps"):
+        analysis.work_precision(dp, *start, t_end=2.0, dts=[0.3], method="rk4",
+                                reference=reference)
+
+
+def test_plot_work_precision_draws_either_error():
+    sp = pl.simple_pendulum()
+    points = analysis.work_precision(sp, [1.0], [0.0], t_end=1.0, dts=[0.1, 0.05], method="rk4")
+    ax = plotting.plot_work_precision(points, x="evaluations", y="state_error").axes[0]
+    assert list(ax.lines[0].get_ydata()) == [p.state_error for p in points]
+    assert "global error" in ax.get_ylabel()
+    with pytest.raises(ValueError, match="`y` must be 'energy_error' or 'state_error'"):
+        plotting.plot_work_precision(points, y="error")
+
+
+def test_compare_methods_is_the_table_of_the_report(tmp_path):
+    dp = pl.double_pendulum()
+    # glrk4's stage iteration cannot converge at dt = 0.25 from this start: a failure, no row
+    result = analysis.compare_methods([(dp, [2.0, 2.5], [0.0, 0.0])], ["rk4", "glrk4"],
+                                      t_end=5.0, dt=0.25)
+    assert [(row.pendulum, row.method) for row in result.rows] == [("double", "rk4")]
+    assert [(p, m) for p, m, _ in result.failures] == [("double", "glrk4")]
+    assert [traj.method.name for traj in result.trajectories["double"]] == ["rk4"]
+    # the report's rows are exactly these
+    report_rows = report.run_report(tmp_path, t_end=5.0, dt=0.25, methods=["rk4", "glrk4"],
+                                    pendulums=["double"], progress=False).rows
+    assert [(r.method, r.energy_last, r.observed_order) for r in report_rows] == [
+        (r.method, r.energy_last, r.observed_order) for r in result.rows
+    ]
+    with pytest.raises(TypeError, match="`problems` must hold"):
+        analysis.compare_methods([dp], ["rk4"], t_end=1.0)
+    with pytest.raises(ValueError, match="`methods` must be among"):
+        analysis.compare_methods([(dp, [0.1, 0.1], [0.0, 0.0])], ["rk5"], t_end=1.0)

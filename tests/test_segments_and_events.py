@@ -190,13 +190,128 @@ def test_land_puts_a_step_of_the_integrator_on_the_surface():
     def advance(tau):
         return (q0, p0) if tau == 0.0 else pl.step(SP, q0, p0=p0, dt=tau, method="glrk4")
 
-    miss, (q, p), tau = events.land(
+    miss, (q, p), tau, steps = events.land(
         advance, lambda s: s[0][0] - 0.3, lambda s: SP.dH_dp(*s)[0], 0.05, (-dt, 2 * dt),
         scale=0.3,
     )
-    assert miss < 1e-15 and abs(q[0] - 0.3) < 1e-15 and 0 < tau < dt
+    assert miss < 1e-15 and abs(q[0] - 0.3) < 1e-15 and 0 < tau < dt and 1 < steps < 12
     # the landed state is one step of the method from the saved state, not an interpolation
     direct = pl.step(SP, q0, p0=p0, dt=tau, method="glrk4")
     assert np.array_equal(direct[0], q) and np.array_equal(direct[1], p)
     # negative control: without iterating, the first guess is off the surface
     assert abs(advance(0.05)[0][0] - 0.3) > 1e-4
+
+
+def _before_the_surface(states, distance):
+    """States on theta_1 = 0 (from the section) moved back in time by ``distance`` (glrk8)."""
+    theta, omega = states
+    p = DP.momenta(theta, omega)
+    back_theta, back_p = theta, p
+    for _ in range(8):
+        back_theta, back_p = pl.step(DP, back_theta, p0=back_p, dt=-distance / 8,
+                                     method="glrk8")
+    return theta, p, back_theta, back_p
+
+
+@pytest.mark.parametrize(
+    ("method", "order"),
+    [("rk4", 4), ("glrk4", 4), ("leapfrog", 2), ("semi_implicit_euler", 1)],
+)
+def test_henon_step_lands_on_the_surface_with_the_local_error_of_the_method(method, order):
+    states = pl.chaos.section_spread(DP, -8.0, orbits=6)
+    errors = []
+    for distance in (0.01, 0.005):
+        theta, p, back_theta, back_p = _before_the_surface(states, distance)
+        theta1, p1, elapsed = pl.henon_step(DP, back_theta, p0=back_p, link=0, level=0.0,
+                                            method=method)
+        assert elapsed.shape == (6,)
+        assert np.max(np.abs(theta1[:, 0])) < 1e-16  # on the surface, up to one rounding
+        errors.append(max(np.max(np.abs(theta1 - theta)), np.max(np.abs(p1 - p)),
+                          np.max(np.abs(elapsed - distance))))
+    # A step's local error falls at least like h^(order + 1) when the step halves (on the
+    # symmetric states theta = 0 of the section, one order faster for the momenta).
+    assert 0.6 * 2 ** (order + 1) < errors[0] / errors[1] < 2 ** (order + 3)
+    # Negative control: the nearest saved step (the start) is off the surface by far more.
+    assert np.min(np.abs(back_theta[:, 0])) > 1e-3
+
+
+def test_henon_step_arguments():
+    theta, p = np.array([[-0.01, 0.3], [-0.02, 0.1]]), np.array([[1.0, 0.0], [1.0, 0.2]])
+    theta1, _, elapsed = pl.henon_step(DP, theta, p0=p, link=0, level=[0.0, 2 * np.pi],
+                                       method="rk4")
+    assert theta1[1, 0] == pytest.approx(2 * np.pi, abs=4e-15) and elapsed[1] > elapsed[0]
+    with pytest.raises(ValueError, match="canonical variables"):
+        pl.henon_step(DP, theta, p0=p, link=0, level=0.0, method="leapfrog_velocity")
+    with pytest.raises(ValueError, match="`level` must be a number or have shape"):
+        pl.henon_step(DP, theta, p0=p, link=0, level=[0.0, 0.0, 0.0], method="rk4")
+    with pytest.raises(ValueError, match="`link`"):
+        pl.henon_step(DP, theta, p0=p, link=2, level=0.0, method="rk4")
+    # at rest, theta_1 does not move: it cannot be the independent variable
+    with pytest.raises(FloatingPointError, match="vanishes"):
+        pl.henon_step(DP, [0.5, 0.0], [0.0, 0.0], link=0, level=0.0, method="rk4")
+
+
+def test_newton_and_henon_landings_find_the_same_crossings():
+    theta0, omega0 = pl.chaos.section_spread(DP, -12.0, orbits=4)
+    kwargs = dict(t_end=30.0, dt=0.01, method="rk4")
+    newton = pl.chaos.poincare_section(DP, theta0, omega0, landing="newton", **kwargs)
+    henon = pl.chaos.poincare_section(DP, theta0, omega0, landing="henon", **kwargs)
+    assert len(newton.t) == len(henon.t) > 40 and np.array_equal(newton.orbit, henon.orbit)
+    assert np.max(henon.residual) < 1e-14 and np.max(newton.residual) < 1e-14
+    # both land from the same saved steps: they differ by a local error, not a global one
+    # (largest at the slowest crossings, where Henon's rescaled field varies fastest)
+    assert np.median(np.abs(newton.p - henon.p)) < 1e-8
+    assert np.max(np.abs(newton.p - henon.p)) < 1e-4
+    assert np.median(np.abs(newton.t - henon.t)) < 1e-9
+    assert set(henon.landing_steps.tolist()) == {1} and newton.landing_steps.mean() > 1.5
+    # Negative control: the nearest saved step is far from both.
+    nearest = pl.chaos.poincare_section(DP, theta0, omega0, landing="nearest", **kwargs)
+    assert np.median(np.abs(nearest.p - henon.p)) > 1e-4
+    with pytest.raises(ValueError, match="`landing`"):
+        pl.chaos.poincare_section(DP, theta0, omega0, landing="bisect", **kwargs)
+    with pytest.raises(ValueError, match="canonical variables"):
+        pl.chaos.poincare_section(DP, theta0, omega0, t_end=1.0, landing="henon",
+                                  method="semi_implicit_euler_velocity")
+
+
+def test_landing_errors_are_local_errors_of_the_method():
+    theta, omega = pl.chaos.section_spread(DP, -5.0, orbits=8)
+    for landing in ("newton", "henon"):
+        coarse = pl.chaos.landing_errors(DP, theta, omega, dt=0.02, method="rk4", landing=landing)
+        fine = pl.chaos.landing_errors(DP, theta, omega, dt=0.01, method="rk4", landing=landing)
+        ratio = coarse.state_error.max() / fine.state_error.max()
+        assert 19 < ratio < 128  # at least 2^5: RK4's local error (2^6 on symmetric states)
+        assert fine.time_error.max() < 1e-8
+    # Negative control: symplectic Euler is first order, its local error falls 2^2.
+    coarse = pl.chaos.landing_errors(DP, theta, omega, dt=0.02, method="semi_implicit_euler",
+                                     landing="henon")
+    fine = pl.chaos.landing_errors(DP, theta, omega, dt=0.01, method="semi_implicit_euler",
+                                   landing="henon")
+    assert 3 < coarse.state_error.max() / fine.state_error.max() < 6
+    with pytest.raises(ValueError, match="must lie on the surface"):
+        pl.chaos.landing_errors(DP, theta + 0.1, omega, dt=0.01)
+
+
+def test_henon_loses_accuracy_at_slow_crossings_and_newton_does_not():
+    # On p_2 = 0, theta_2 near the largest angle E = -12 J reaches: theta_1' falls towards 0.
+    theta, omega = pl.chaos.section_states(DP, -12.0, [[1.0], [2.44], [2.455]], [[0.0]] * 3)
+    henon = pl.chaos.landing_errors(DP, theta, omega, dt=0.01, method="rk4", landing="henon")
+    newton = pl.chaos.landing_errors(DP, theta, omega, dt=0.01, method="rk4", landing="newton")
+    assert np.array_equal(henon.speed, newton.speed) and henon.speed[2] < 0.25
+    assert henon.state_error[2] > 100 * newton.state_error[2]
+    # Negative control: at the brisk crossing the two are alike.
+    assert 0.2 < henon.state_error[0] / newton.state_error[0] < 5
+
+
+def test_henon_step_carries_the_time_of_a_driven_model():
+    driven = pl.driven_pendulum()  # damped and driven: the field depends on t
+    start, p_start, t0 = np.array([-0.02]), np.array([1.5]), 1.3
+    theta1, p1, elapsed = pl.henon_step(driven, start, p0=p_start, link=0, level=0.0,
+                                        method="rk4", t0=t0)
+    assert abs(theta1[0]) < 1e-16 and 0 < elapsed < 0.02
+    # one step of the same method in time, of the length found, lands at the same state
+    in_time = pl.step(driven, start, p0=p_start, dt=elapsed, method="rk4", t0=t0)
+    assert np.max(np.abs(np.r_[theta1 - in_time[0], p1 - in_time[1]])) < 1e-10
+    # Negative control: the drive's phase matters; starting the clock at 0 lands elsewhere.
+    _, p_wrong, _ = pl.henon_step(driven, start, p0=p_start, link=0, level=0.0, method="rk4")
+    assert abs(p_wrong[0] - p1[0]) > 1e-6

@@ -70,6 +70,25 @@ def test_angle_slider_recomputes_and_redraws(dp_explorer):
     assert ex.widget.children[-1].value != before_png
 
 
+def test_set_controls_changes_several_and_recomputes_once(dp_explorer, monkeypatch):
+    ex = dp_explorer
+    computed = []
+    compute = ex.compute
+    monkeypatch.setattr(ex, "compute", lambda: computed.append(1) or compute())
+    assert ex.set_controls({"theta1": 0.4, "theta2": -0.3, "omega1": 1.0})
+    assert len(computed) == 1
+    np.testing.assert_array_equal(ex.trajectory.theta[0], [0.4, -0.3])
+    assert ex.trajectory.omega[0, 0] == pytest.approx(1.0)
+    # Negative control: one control at a time recomputes each time.
+    ex.controls["theta1"].value = 0.1
+    ex.controls["theta2"].value = 0.2
+    assert len(computed) == 3
+    # An unknown name changes nothing.
+    with pytest.raises(ValueError, match="no control named"):
+        ex.set_controls({"theta1": 0.9, "theta9": 1.0})
+    assert ex.controls["theta1"].value == 0.1 and len(computed) == 3
+
+
 def test_velocity_slider_sets_the_initial_velocity(dp_explorer):
     dp_explorer.controls["omega2"].value = 1.5
     np.testing.assert_array_equal(dp_explorer.trajectory.omega[0], [0.0, 1.5])

@@ -18,11 +18,19 @@ Quick start
 True
 """
 
-from .integrators import CONFORMAL_METHODS, METHODS, ConvergenceError, Method, get_method
+from .family import ModelFamily
+from .integrators import (
+    CONFORMAL_METHODS,
+    METHODS,
+    VARIATIONAL_METHODS,
+    ConvergenceError,
+    Method,
+    get_method,
+)
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
-from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
+from .simulate import Trajectory, hamiltonian_field, henon_step, simulate, step, step_count
 
 __version__ = "0.1.0"
 
@@ -30,7 +38,7 @@ __version__ = "0.1.0"
 # first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
 _LAZY_SUBMODULES = {"analysis", "animation", "chaos", "cluster", "codegen", "discrete_mechanics",
                     "events", "geometric", "long_chains", "mechanics", "plotting", "report",
-                    "source", "tables", "timing", "widgets"}
+                    "source", "tables", "timing", "warmup", "widgets"}
 
 
 def __getattr__(name):
@@ -38,6 +46,10 @@ def __getattr__(name):
         from .geometric import modified_hamiltonian
 
         return modified_hamiltonian
+    if name == "warm_up":  # reaches every layer's kernels, loaded on use
+        from .warmup import warm_up
+
+        return warm_up
     if name in _LAZY_SUBMODULES:
         import importlib
 
@@ -50,14 +62,17 @@ __all__ = [
     "Chain",
     "ConvergenceError",
     "Method",
+    "ModelFamily",
     "PendulumModel",
     "SegmentedRun",
     "Trajectory",
+    "VARIATIONAL_METHODS",
     "derive_chain",
     "double_pendulum",
     "driven_pendulum",
     "get_method",
     "hamiltonian_field",
+    "henon_step",
     "modified_hamiltonian",
     "n_pendulum",
     "simple_pendulum",
@@ -65,4 +80,5 @@ __all__ = [
     "simulate_segments",
     "step",
     "step_count",
+    "warm_up",
 ]

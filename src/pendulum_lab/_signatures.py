@@ -18,3 +18,15 @@ from numba import types
 VECTOR = types.float64[::1]
 HAMILTON = types.void(types.float64, VECTOR, VECTOR, VECTOR, VECTOR, VECTOR)
 ACCELERATION = types.void(types.float64, VECTOR, VECTOR, VECTOR, VECTOR)
+
+# Variational integrators solve the discrete Legendre transform
+# ``p0 = -D_1 L_d(q0, q1)`` for ``q1`` and then evaluate ``p1 = D_2 L_d(q0, q1)``,
+# as ``p0`` plus the impulse ``D_2 L_d + D_1 L_d``
+# (see :mod:`pendulum_lab.discrete_mechanics`). Their kernels have the same
+# Numba types as the two above, so a variational step has the signature of
+# every other step and receives them in the same two places:
+#
+# ``update(h, q0, q1, params, p0, out)``: ``out`` = the next iterate for ``q1``;
+# ``impulse(h, q0, q1, params, out)``: ``out = D_2 L_d(q0, q1) + D_1 L_d(q0, q1)``.
+DISCRETE_UPDATE = HAMILTON
+DISCRETE_MOMENTUM = ACCELERATION

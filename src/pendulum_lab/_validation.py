@@ -101,6 +101,27 @@ def _entries(name: str, values, n: int, kind: str) -> list:
     return items
 
 
+def real_array(name: str, values) -> np.ndarray:
+    """``values`` as a non-empty array of finite floats (any shape)."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"`{name}` must hold real numbers") from None
+    if array.size == 0:
+        raise ValueError(f"`{name}` must hold at least one value")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"`{name}` must be finite, got {array[~np.isfinite(array)][0]}")
+    return array
+
+
+def real_sequence(name: str, values) -> np.ndarray:
+    """``values`` as a 1-d array of finite floats, at least one."""
+    array = real_array(name, values)
+    if array.ndim != 1:
+        raise ValueError(f"`{name}` must be a 1-d sequence of numbers, got shape {array.shape}")
+    return array
+
+
 def positive_vector(name: str, values, n: int) -> tuple[float, ...]:
     """A sequence of ``n`` finite positive numbers."""
     items = _entries(name, values, n, "positive numbers")
@@ -153,6 +174,14 @@ def pendulum_model(model):
             "`model` must be a PendulumModel (from simple_pendulum, driven_pendulum, "
             f"double_pendulum or n_pendulum), got {type(model).__name__}"
         )
+    return model
+
+
+def double_pendulum(model):
+    """``model`` itself if it is a :class:`~pendulum_lab.PendulumModel` with two links."""
+    pendulum_model(model)
+    if model.n != 2:
+        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
     return model
 
 

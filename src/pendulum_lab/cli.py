@@ -277,7 +277,7 @@ def _add_lab_command(subparsers) -> None:
 
 def run_warmup(args) -> int:
     """Compile the numerical kernels now instead of on first use."""
-    from .simulate import warm_up
+    from .warmup import warm_up
 
     seconds = warm_up(ns=args.n)
     print(f"pendulum_lab kernels ready for chains of {args.n} link(s) ({seconds:.1f} s)")

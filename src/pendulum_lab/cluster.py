@@ -31,7 +31,7 @@ import numpy as np
 
 from . import _validation as check
 
-__all__ = ["check_client", "map_members", "portable_method"]
+__all__ = ["check_client", "map_members", "members_of", "portable_method"]
 
 #: Chunks per worker when the caller gives no ``chunk_size``: a few, so that a
 #: slow worker (or a chunk of slow members) does not hold up the rest.
@@ -59,6 +59,17 @@ def check_client(client):
         raise TypeError(f"`client` must be a dask.distributed.Client or None, got "
                         f"{type(client).__name__}")
     return client
+
+
+def members_of(model, rows):
+    """The model of rows ``rows`` (indices into a flattened batch) of a run of ``model``.
+
+    A plain model serves every row; a
+    :class:`~pendulum_lab.family.ModelFamily` flattened for the batch
+    (``for_ensemble``) gives those members, so that a chunk of the batch
+    carries its own parameters.
+    """
+    return model.select(np.asarray(rows)) if model.shape else model
 
 
 def portable_method(method, client):

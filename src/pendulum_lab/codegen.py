@@ -44,10 +44,19 @@ import sympy as sp
 from numba import types
 
 from ._signatures import VECTOR
+from .discrete_mechanics import DiscreteLagrangian, discrete_lagrangian
 from .mechanics import Chain, derive_chain
 from .model import UNROLLED_MAX_LINKS
 
-__all__ = ["kernel_source", "load_kernels", "looped_kernels", "parameters_array", "solve_spd"]
+__all__ = [
+    "discrete_kernel_source",
+    "kernel_source",
+    "load_discrete_kernels",
+    "load_kernels",
+    "looped_kernels",
+    "parameters_array",
+    "solve_spd",
+]
 
 
 
@@ -103,8 +112,8 @@ def _assignments(targets: list[str], exprs: list[sp.Expr], mapping: dict, prefix
 
 
 def _solve_lines(chain: Chain, mapping: dict, rhs: list[str], rhs_array: str, out: str,
-                 prefix: str) -> list[str]:
-    """Lines that solve ``M(q) out = rhs``.
+                 prefix: str, mass: sp.Matrix | None = None) -> list[str]:
+    """Lines that solve ``M(q) out = rhs`` (or ``mass out = rhs``, ``mass`` SPD).
 
     ``rhs`` names the right-hand side's entries, ``rhs_array`` the array that
     holds them. For one or two links the closed form needs no array at all
@@ -112,7 +121,7 @@ def _solve_lines(chain: Chain, mapping: dict, rhs: list[str], rhs_array: str, ou
     :func:`solve_spd`.
     """
     n = chain.n
-    mass = list(chain.mass_matrix)
+    mass = list(chain.mass_matrix if mass is None else mass)
     if n == 1:
         (m00,) = _assignments(["m00"], mass, mapping, prefix)
         return [m00, f"{out}[0] = {rhs[0]} / m00"]
@@ -217,12 +226,22 @@ def load_kernels(n: int, forced: bool = False, looped: bool | None = None) -> Si
     if looped if looped is not None else n > UNROLLED_MAX_LINKS:
         return looped_kernels()
     source = kernel_source(derive_chain(n, forced))
-    # The file name carries a hash of the generated text and of this module,
-    # so a change in either gets a fresh file and a fresh Numba cache.
+    module, path = _import_generated(f"chain{n}_forced" if forced else f"chain{n}", source)
+    return SimpleNamespace(hamilton=module.hamilton, acceleration=module.acceleration,
+                           source=source, path=path)
+
+
+def _import_generated(stem: str, source: str, derived_from=()):
+    """Write ``source`` into the cache folder (if changed) and import it as a module.
+
+    The file name carries a hash of the generated text and of the modules it
+    comes from (this one, the signatures, and ``derived_from``), so a change
+    in any of them gets a fresh file and a fresh Numba cache.
+    """
     here = Path(__file__).parent
-    support = (here / "codegen.py").read_bytes() + (here / "_signatures.py").read_bytes()
+    support = b"".join((here / name).read_bytes()
+                       for name in ("codegen.py", "_signatures.py", *derived_from))
     digest = hashlib.sha256(source.encode() + support).hexdigest()[:16]
-    stem = f"chain{n}_forced" if forced else f"chain{n}"
     path = cache_dir() / f"{stem}_{digest}.py"
     _write_if_changed(path, source)
     name = f"pendulum_lab_kernels_{stem}_{digest}"
@@ -230,8 +249,7 @@ def load_kernels(n: int, forced: bool = False, looped: bool | None = None) -> Si
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     spec.loader.exec_module(module)
-    return SimpleNamespace(hamilton=module.hamilton, acceleration=module.acceleration,
-                           source=source, path=path)
+    return module, path
 
 
 @functools.cache
@@ -253,3 +271,130 @@ def looped_kernels() -> SimpleNamespace:
 def parameters_array(masses, lengths, g) -> np.ndarray:
     """``params`` of a conservative chain as the kernels expect it."""
     return np.array([*masses, *lengths, g], dtype=float)
+
+
+# ----------------------------------------------------------------------- variational integrators
+def _discrete_symbols(dl: DiscreteLagrangian) -> dict:
+    """Map ``q_k``, ``q_{k+1}``, ``v``, ``h`` and the parameters to the kernels' local names."""
+    n = dl.n
+    plain = [sp.symbols(f"{base}0:{n}", real=True) for base in ("a", "b", "v")]
+    pars = sp.symbols(f"par0:{len(dl.chain.parameters)}", real=True)
+    mapping = dict(zip(dl.q, plain[0])) | dict(zip(dl.q_next, plain[1]))
+    mapping |= dict(zip(dl.v, plain[2])) | dict(zip(dl.chain.parameters, pars))
+    return mapping | {dl.h: sp.Symbol("h", positive=True)}
+
+
+def _general_solve_lines(n: int, matrix: str, rhs: str, out: str) -> list[str]:
+    """Lines ``out_i = (matrix^-1 rhs)_i`` for a general (not symmetric) matrix.
+
+    ``matrix`` names entries ``{matrix}ij`` and ``rhs`` entries ``{rhs}i``
+    (local variables); closed forms for ``n <= 2``, LAPACK beyond.
+    """
+    if n == 1:
+        return [f"{out}0 = {rhs}0 / {matrix}00"]
+    if n == 2:
+        return [
+            f"det = {matrix}00 * {matrix}11 - {matrix}01 * {matrix}10",
+            f"{out}0 = ({matrix}11 * {rhs}0 - {matrix}01 * {rhs}1) / det",
+            f"{out}1 = ({matrix}00 * {rhs}1 - {matrix}10 * {rhs}0) / det",
+        ]
+    entries = ", ".join("(" + ", ".join(f"{matrix}{i}{j}" for j in range(n)) + ",)"
+                        for i in range(n))
+    return [f"solution = np.linalg.solve(np.array(({entries})), "
+            f"np.array(({', '.join(f'{rhs}{i}' for i in range(n))},)))"] + [
+        f"{out}{i} = solution[{i}]" for i in range(n)]
+
+
+def discrete_kernel_source(dl: DiscreteLagrangian) -> str:
+    """The Python source of the Numba kernels of a variational integrator.
+
+    Three kernels, printed from the velocity forms of ``dl`` (see
+    :class:`~pendulum_lab.discrete_mechanics.DiscreteLagrangian`), where
+    ``v = (q1 - q0) / h`` is formed once, so no ``1/h`` cancels at run time:
+
+    ``fixed_point_update(h, q0, q1, params, p0, out)``
+        ``out = q1 + h Mbar^-1 (p0 - p_k(q0, q1))`` with ``p_k = -D_1 L_d``
+        and the mean mass matrix ``Mbar`` (SPD): a fixed point ``q1`` solves
+        the transform, and the map contracts by ``O(h |omega|)``.
+    ``newton_update(h, q0, q1, params, p0, out)``
+        One Newton step ``out = q1 - (dp_k/dq1)^-1 (p_k(q0, q1) - p0)`` with the
+        generated Jacobian.
+    ``impulse(h, q0, q1, params, out)``
+        ``out = D_2 L_d(q0, q1) + D_1 L_d(q0, q1)``: the momentum after the step
+        minus the one before, ``h`` times forces. Written as ``p1 = p0 +
+        impulse`` the update keeps round-off at the level of ``p``; evaluating
+        ``D_2 L_d`` itself would form ``Mbar v`` with ``v = (q1 - q0) / h``
+        and carry the rounding of ``q1`` divided by ``h``.
+    """
+    n = dl.n
+    chain, mapping = dl.chain, _discrete_symbols(dl)
+    unpack = [f"a{i} = q0[{i}]" for i in range(n)] + [f"b{i} = q1[{i}]" for i in range(n)]
+    unpack += [f"v{i} = (b{i} - a{i}) / h" for i in range(n)]
+    unpack += [f"par{i} = params[{i}]" for i in range(len(chain.parameters))]
+
+    fixed = list(unpack)
+    fixed += _assignments([f"k{i}" for i in range(n)], list(dl.momentum_minus_form), mapping, "c")
+    residual = [f"r{i}" for i in range(n)] if n <= 2 else [f"rhs[{i}]" for i in range(n)]
+    if n > 2:
+        fixed.append(f"rhs = np.empty({n})")
+    fixed += [f"{r} = p0[{i}] - k{i}" for i, r in enumerate(residual)]
+    fixed += _solve_lines(chain, mapping, residual, "rhs", "out", "d", mass=dl.mean_mass)
+    fixed += [f"out[{i}] = b{i} + h * out[{i}]" for i in range(n)]
+
+    newton = list(unpack)
+    jacobian = dl.momentum_minus_jacobian_form
+    newton += _assignments([f"k{i}" for i in range(n)] + [f"j{i}{j}" for i in range(n)
+                                                            for j in range(n)],
+                           [*dl.momentum_minus_form, *jacobian], mapping, "c")
+    newton += [f"r{i} = k{i} - p0[{i}]" for i in range(n)]
+    newton += _general_solve_lines(n, "j", "r", "x")
+    newton += [f"out[{i}] = b{i} - x{i}" for i in range(n)]
+
+    impulse = list(unpack)
+    impulse += _assignments([f"out[{i}]" for i in range(n)], list(dl.impulse_form), mapping, "c")
+
+    kernels = [
+        ("DISCRETE_UPDATE", "fixed_point_update", "h, q0, q1, params, p0, out",
+         "out = q1 + h Mbar(q0, q1)^-1 (p0 - p_k(q0, q1)).", fixed),
+        ("DISCRETE_UPDATE", "newton_update", "h, q0, q1, params, p0, out",
+         "out = q1 - J^-1 (p_k(q0, q1) - p0), J = dp_k/dq1.", newton),
+        ("DISCRETE_MOMENTUM", "impulse", "h, q0, q1, params, out",
+         "out = p_(k+1) - p_k = D_2 L_d(q0, q1) + D_1 L_d(q0, q1).", impulse),
+    ]
+    header = f'''"""Generated by pendulum_lab.codegen: the discrete Legendre transforms of the
+{dl.rule} rule for a chain of {n} link(s); do not edit.
+
+q0, q1 = (theta_1..theta_{n}) at the start and the end of a step of size h,
+params = (m_1..m_{n}, l_1..l_{n}, g), p_k = -D_1 L_d(q0, q1), p_(k+1) = D_2 L_d(q0, q1).
+"""
+import math
+
+import numba
+import numpy as np
+
+from pendulum_lab._signatures import DISCRETE_MOMENTUM, DISCRETE_UPDATE
+from pendulum_lab.codegen import solve_spd
+'''
+    return header + "".join(_kernel_text(*kernel) for kernel in kernels)
+
+
+def _kernel_text(signature: str, name: str, arguments: str, docstring: str, lines) -> str:
+    """One generated kernel: decorator, signature line, docstring, indented body."""
+    body = "\n".join("    " + line for line in lines)
+    return (f"\n\n@numba.njit({signature}, cache=True)\ndef {name}({arguments}):\n"
+            f'    """{docstring}"""\n{body}\n')
+
+
+@functools.cache
+def load_discrete_kernels(n: int, rule: str) -> SimpleNamespace:
+    """Compile (or load from the disk cache) the variational kernels for ``n`` links.
+
+    Returns a namespace with ``fixed_point_update``, ``newton_update`` and
+    ``impulse`` (see :func:`discrete_kernel_source`), ``source`` and ``path``.
+    """
+    source = discrete_kernel_source(discrete_lagrangian(n, rule))
+    module, path = _import_generated(f"discrete{n}_{rule}", source,
+                                     derived_from=("discrete_mechanics.py", "mechanics.py"))
+    return SimpleNamespace(fixed_point_update=module.fixed_point_update,
+                           newton_update=module.newton_update,
+                           impulse=module.impulse, source=source, path=path)

@@ -12,10 +12,20 @@ know nothing of events; as in SciPy's ``solve_ivp(events=...)`` and diffrax's
    2 pi m``).
 2. **Location** inside the step: :meth:`Crossings.fraction` interpolates
    linearly, or, given the rates ``dg/dt`` at both ends, finds the root of the
-   cubic Hermite interpolant (fourth-order accurate between steps);
-   :func:`land` then lands exactly on the surface by a Newton iteration on
-   the length of one extra step of the integrator (Henon's idea, done as a
-   root solve in time).
+   cubic Hermite interpolant (fourth-order accurate between steps).
+3. **Landing** on the surface, in one of two ways:
+
+   * :func:`land`: Newton's method on the length ``tau`` of one extra step
+     of the integrator from the saved state before the crossing, started
+     from the interpolated time. Every iterate is a genuine step of the
+     integrator's flow in time; it needs the event's rate and a few steps.
+   * Henon's trick [Henon]_, :func:`pendulum_lab.henon_step`, for an event
+     that is a coordinate (an angle passing a value): that coordinate
+     becomes the independent variable, and one step of the same integrator
+     on the rescaled field goes exactly to the surface, without iteration.
+
+   Both land on the surface to round-off, with an error of the integrator's
+   local order; :func:`pendulum_lab.chaos.landing_errors` measures it.
 
 :func:`hermite` is the cubic Hermite interpolant between two saved states,
 written once: the root finder and the tangent propagators of
@@ -221,7 +231,7 @@ def land(
     *,
     scale: float = 1.0,
     max_iterations: int = 12,
-) -> tuple[float, tuple, float]:
+) -> tuple[float, tuple, float, int]:
     """Newton's method on the length ``tau`` of one extra step, until the event is met.
 
     ``advance(tau)`` returns the state one integrator step of length ``tau``
@@ -230,7 +240,9 @@ def land(
     the event function there and ``rate(state)`` its time derivative. Each
     iterate is a genuine state of the integrator's numerical flow, so the
     landed state is as accurate as the integrator and lies on the surface to
-    round-off.
+    round-off. This is a root solve in time; Henon's trick, which changes the
+    independent variable instead and needs one step, is
+    :func:`pendulum_lab.henon_step`.
 
     Parameters
     ----------
@@ -243,14 +255,16 @@ def land(
 
     Returns
     -------
-    (abs_miss, state, tau)
+    (abs_miss, state, tau, steps)
         The best iterate: how far it lies from the surface, the state and the
-        step length.
+        step length; and how many integrator steps the iteration took.
     """
     best = (np.inf, advance(0.0), 0.0)
     tolerance = 4 * np.finfo(float).eps * max(1.0, abs(scale))
+    steps = 0
     for _ in range(max_iterations):
         state = advance(tau)
+        steps += 1
         off = miss(state)
         if abs(off) < best[0]:
             best = (abs(off), state, tau)
@@ -260,4 +274,4 @@ def land(
         if speed == 0:
             break
         tau = float(np.clip(tau - off / speed, *bounds))
-    return best
+    return (*best, steps)

@@ -30,11 +30,19 @@ methods compose them with the exact flow of linear damping. All implicit
 equations are iterated to round-off with one stopping rule,
 :func:`fixed_point_status`.
 
+The variational integrators (:data:`VARIATIONAL_METHODS`) are made from a
+discrete Lagrangian instead of the vector field: their step solves the
+discrete Legendre transform with kernels generated per chain
+(:func:`pendulum_lab.codegen.load_discrete_kernels`), which it receives in
+place of ``hamilton`` and ``acceleration`` (same Numba types; see
+:func:`step_kernels`).
+
 Which fields a method accepts (:attr:`Method.applies_to`): Runge-Kutta and
 the velocity methods integrate any field; symplectic Euler and the leapfrog
 assume a Hamiltonian one (a drive is fine: ``H`` then depends on ``t``); the
 conformal methods need damping of the form ``-gamma p`` (constant
-``gamma``). :func:`unsuitability` says why a method does not fit a field.
+``gamma``); the variational methods need the discrete Lagrangian of an
+unforced chain. :func:`unsuitability` says why a method does not fit a field.
 
 References
 ----------
@@ -49,6 +57,9 @@ References
    J. Geom. Phys. 39 (2001) 276-300: splitting a conformal Hamiltonian field
    into its Hamiltonian part and the linear damping keeps the exact
    contraction of the symplectic form.
+.. [MW] J. E. Marsden, M. West, "Discrete mechanics and variational
+   integrators", Acta Numerica 10 (2001) 357-514, Sect. 1.3 and 2.1: the
+   discrete Legendre transforms define a symplectic one-step map.
 """
 
 from __future__ import annotations
@@ -61,12 +72,15 @@ import numba
 import numpy as np
 from numba import types
 
+from . import _validation as check
 from ._signatures import ACCELERATION, HAMILTON, VECTOR
+from .discrete_mechanics import RULES
 from .tableau import ButcherTableau, gauss_legendre_tableau
 
 __all__ = [
     "CONFORMAL_METHODS",
     "METHODS",
+    "VARIATIONAL_METHODS",
     "ButcherTableau",
     "ConvergenceError",
     "HamiltonianField",
@@ -79,9 +93,12 @@ __all__ = [
     "implicit_rk",
     "remove_damping",
     "run",
+    "step_kernels",
     "suitable_methods",
     "tableau_step",
     "unsuitability",
+    "variational_method",
+    "variational_step",
 ]
 
 
@@ -106,6 +123,11 @@ class HamiltonianField:
         ``gamma`` when the non-Hamiltonian part of ``dp/dt`` is exactly
         ``-gamma p`` (a conformal Hamiltonian field [MP]); ``0`` for a
         Hamiltonian field; NaN for damping of any other form.
+    discrete : callable or None
+        ``discrete(rule)`` returns the compiled discrete Legendre transforms
+        of the field's discrete Lagrangian by ``rule`` (a namespace with
+        ``fixed_point_update``, ``newton_update``, ``impulse``); None
+        when the field has no Lagrangian of its own (damping or a drive).
     """
 
     hamilton: object
@@ -113,6 +135,7 @@ class HamiltonianField:
     params: np.ndarray
     separable: bool
     damping_rate: float | np.ndarray = 0.0
+    discrete: object = field(default=None, repr=False)
 
 
 # --------------------------------------------------------------------------- kernel types
@@ -481,6 +504,74 @@ def leapfrog_velocity_step(hamilton, acceleration, t, q, v, h, params, separable
     return q1, v_half + 0.5 * h * a, 0, 2
 
 
+# ----------------------------------------------------------------------- variational integrators
+@jit_step
+def variational_step(update, impulse, t, q, p, h, params, separable, damping_rate):
+    """A variational integrator [MW]: the discrete Legendre transforms, solved.
+
+    ``p = -D_1 L_d(q, q1)``   (implicit in ``q1``)
+    ``p1 = D_2 L_d(q, q1)``   (explicit; computed as ``p + D_2 L_d + D_1 L_d``)
+
+    ``update(h, q, q1, params, p, out)`` writes the next iterate for ``q1``
+    (a fixed-point or a Newton step, generated from the discrete Lagrangian);
+    it is iterated from ``q1 = q`` until :func:`fixed_point_status` finds
+    round-off (the first iterate is already a symplectic-Euler-like guess).
+    ``impulse(h, q, q1, params, out)`` writes ``p1 - p``. ``t``,
+    ``separable`` and ``damping_rate`` are not used: the discrete Lagrangian
+    is autonomous and conservative. ``calls`` counts kernel evaluations.
+    """
+    q1, new = q.copy(), np.empty_like(q)
+    smallest, status, sweeps = np.full(q.size, np.inf), 0, 0
+    while status == 0 and sweeps < MAX_SWEEPS:
+        sweeps += 1
+        update(h, q, q1, params, p, new)
+        status = fixed_point_status(new, q1, smallest)
+        q1, new = new, q1
+    if status != 1:
+        return q, p, -1, sweeps
+    kick = np.empty_like(p)
+    impulse(h, q, q1, params, kick)
+    return q1, p + kick, sweeps, sweeps + 1
+
+
+#: How a variational step solves for ``q1``: the generated kernel it iterates.
+VARIATIONAL_SOLVERS = {"fixed_point": "fixed_point_update", "newton": "newton_update"}
+
+
+def variational_method(rule: str, solver: str, name: str | None = None) -> Method:
+    """The variational integrator of the discrete Lagrangian ``rule``, solved by ``solver``.
+
+    Parameters
+    ----------
+    rule : {"midpoint", "trapezoid"}
+        The quadrature of the action (see :mod:`pendulum_lab.discrete_mechanics`).
+    solver : {"fixed_point", "newton"}
+        How the step solves ``p = -D_1 L_d(q, q1)`` for ``q1``.
+    name : str, optional
+        By default ``"variational_<rule>"``.
+    """
+    rule = check.choice("rule", rule, RULES)
+    solver = check.choice("solver", solver, VARIATIONAL_SOLVERS)
+    quadrature = "M and L at the midpoint" if rule == "midpoint" else "L averaged over both ends"
+    return Method(name or f"variational_{rule}", 2, True, True, "canonical",
+                  f"variational integrator of the {rule} rule ({quadrature}): symmetric, "
+                  "symplectic in (theta, p)", variational_step, applies_to=LAGRANGIAN_FIELD,
+                  rule=rule, solver=solver)
+
+
+def step_kernels(method: Method, field: HamiltonianField) -> tuple:
+    """The two kernels ``method``'s step receives for ``field``.
+
+    ``(field.hamilton, field.acceleration)``, or for a variational method the
+    update and the momentum of the field's discrete Legendre transforms
+    (compiled on first use).
+    """
+    if method.rule is None:
+        return field.hamilton, field.acceleration
+    kernels = field.discrete(method.rule)
+    return getattr(kernels, VARIATIONAL_SOLVERS[method.solver]), kernels.impulse
+
+
 # --------------------------------------------------------------------------- the time loop
 MATRIX = types.float64[:, ::1]
 RUN = types.void(
@@ -549,6 +640,7 @@ run = LazyKernel(RUN, _run, cache=True, nogil=True)
 # --------------------------------------------------------------------------- registry
 #: Values of :attr:`Method.applies_to`.
 ANY_FIELD, HAMILTONIAN_FIELD, CONFORMAL_FIELD = "any", "hamiltonian", "conformal"
+LAGRANGIAN_FIELD = "lagrangian"
 
 
 @dataclass(frozen=True)
@@ -575,11 +667,16 @@ class Method:
     kernel : LazyKernel
         The step function (see the module docstring); ``kernel.py_func`` is
         its Python source, ``kernel.compiled`` the machine code.
-    applies_to : {"any", "hamiltonian", "conformal"}
+    applies_to : {"any", "hamiltonian", "conformal", "lagrangian"}
         The fields it integrates: any; Hamiltonian ones (``damping_rate``
-        zero); conformal ones (``damping_rate`` finite, zero included).
+        zero); conformal ones (``damping_rate`` finite, zero included);
+        those with a discrete Lagrangian (an unforced chain: no damping, no
+        drive).
     tableau : ButcherTableau or None
         The Butcher tableau of a Runge-Kutta method.
+    rule, solver : str or None
+        For a variational method (:func:`variational_method`): the discrete
+        Lagrangian's quadrature rule and how its step solves for ``q1``.
     """
 
     name: str
@@ -591,6 +688,8 @@ class Method:
     kernel: object = field(repr=False)
     applies_to: str = ANY_FIELD
     tableau: ButcherTableau | None = field(default=None, repr=False)
+    rule: str | None = None
+    solver: str | None = None
 
     @classmethod
     def from_tableau(cls, name: str, tableau: ButcherTableau, summary: str) -> Method:
@@ -638,13 +737,29 @@ _REGISTRY = [
     Method("conformal_leapfrog", 2, True, True, "canonical",
            "conformal Stormer-Verlet: exact damping for h/2, leapfrog, damping for h/2",
            conformal_leapfrog_step, applies_to=CONFORMAL_FIELD),
+    # Fixed-point iteration, as for Gauss-Legendre. Newton's method with the
+    # generated Jacobian needs half the iterations and is faster per step
+    # (benchmark item 7), but at large steps it can converge to another root
+    # of the discrete equations, off the branch that continues the small-step
+    # solution, where fixed-point iteration stops with an error
+    # (tests/test_variational.py): no result is silently wrong.
+    variational_method("midpoint", "fixed_point"),
+    variational_method("trapezoid", "fixed_point"),
 ]
 #: The methods for Hamiltonian systems, compared throughout the course.
-METHODS: dict[str, Method] = {m.name: m for m in _REGISTRY if m.applies_to != CONFORMAL_FIELD}
+METHODS: dict[str, Method] = {
+    m.name: m for m in _REGISTRY if m.applies_to in (ANY_FIELD, HAMILTONIAN_FIELD)
+}
 #: The methods for damped (conformal Hamiltonian) systems; on a Hamiltonian
 #: field they are symplectic Euler and the leapfrog.
 CONFORMAL_METHODS: dict[str, Method] = {
     m.name: m for m in _REGISTRY if m.applies_to == CONFORMAL_FIELD
+}
+#: The variational integrators of notebook 15, made from discrete Lagrangians;
+#: on the chains they coincide with, or stay within O(h^3) per step of, the
+#: implicit midpoint rule and the leapfrog.
+VARIATIONAL_METHODS: dict[str, Method] = {
+    m.name: m for m in _REGISTRY if m.applies_to == LAGRANGIAN_FIELD
 }
 # The tableaus by name, for notebooks and tests (the registry holds them).
 EULER_TABLEAU = METHODS["explicit_euler"].tableau
@@ -661,29 +776,28 @@ def get_method(method) -> Method:
         return method
     if not isinstance(method, str):
         raise TypeError(f"`method` must be a method name (str), got {type(method).__name__}")
-    for registry in (METHODS, CONFORMAL_METHODS):
+    for registry in (METHODS, CONFORMAL_METHODS, VARIATIONAL_METHODS):
         if method in registry:
             return registry[method]
-    names = [*METHODS, *CONFORMAL_METHODS]
+    names = [*METHODS, *CONFORMAL_METHODS, *VARIATIONAL_METHODS]
     raise ValueError(f"`method` must be one of {names}, got {method!r}")
 
 
-def unsuitability(method: Method, damping_rate) -> str | None:
-    """Why ``method`` cannot integrate a field with this ``damping_rate``, or None if it can.
-
-    ``damping_rate`` is a :attr:`HamiltonianField.damping_rate` (a float or
-    one per ensemble member).
-    """
-    rates = np.asarray(damping_rate, dtype=float)
-    if method.applies_to == HAMILTONIAN_FIELD and np.any(rates != 0):
+def unsuitability(method: Method, field: HamiltonianField) -> str | None:
+    """Why ``method`` cannot integrate ``field``, or None if it can."""
+    rates = np.asarray(field.damping_rate, dtype=float)
+    if method.applies_to in (HAMILTONIAN_FIELD, LAGRANGIAN_FIELD) and np.any(rates != 0):
         return (f"{method.name} assumes a Hamiltonian vector field, and damping is not "
                 "Hamiltonian (its guesses and its symplecticity rely on dp/dt = -H_q)")
+    if method.applies_to == LAGRANGIAN_FIELD and field.discrete is None:
+        return (f"{method.name} steps the discrete Lagrangian of the unforced chain, "
+                "L = T - V, and a drive torque is not part of L")
     if method.applies_to == CONFORMAL_FIELD and not np.all(np.isfinite(rates)):
         return (f"{method.name} needs damping of the conformal form dp/dt = -H_q - gamma p "
                 "with a constant gamma")
     return None
 
 
-def suitable_methods(damping_rate) -> list[str]:
-    """Names of the registered methods that integrate a field with this ``damping_rate``."""
-    return [m.name for m in _REGISTRY if unsuitability(m, damping_rate) is None]
+def suitable_methods(field: HamiltonianField) -> list[str]:
+    """Names of the registered methods that integrate ``field``."""
+    return [m.name for m in _REGISTRY if unsuitability(m, field) is None]

@@ -215,12 +215,15 @@ VELOCITIES, MOMENTA, RATES, FORCING, ACCELERATIONS, FORCES = range(6)
 
 
 @numba.njit(cache=True)
-def _rows(kind, theta, other, params, t, out):
+def _rows(kind, theta, other, parameter_rows, t, out):
+    """``parameter_rows``: shape (1, P), shared, or (K, P), one row per state."""
     n = theta.shape[1]
     work = np.empty((WORK_ROWS, n))
     ones = np.ones(n)
+    shared = parameter_rows.shape[0] == 1
     for k in range(theta.shape[0]):
         q, u, row = theta[k], other[k], out[k]
+        params = parameter_rows[0 if shared else k]
         if kind == ACCELERATIONS:
             acceleration(t[k], q, u, params, row)
             continue
@@ -261,27 +264,44 @@ class LoopedChain:
         self.separable = n == 1
 
     # ---- helpers -----------------------------------------------------------
-    def _batch(self, kind, theta, other, params, t=0.0):
-        theta, other = np.broadcast_arrays(np.asarray(theta, float), np.asarray(other, float))
-        shape = theta.shape
-        flat = np.ascontiguousarray(theta.reshape(-1, self.n))
-        times = np.ascontiguousarray(np.broadcast_to(np.asarray(t, float), shape[:-1]).ravel())
-        out = np.empty_like(flat)
-        _rows(kind, flat, np.ascontiguousarray(other.reshape(-1, self.n)),
-              np.asarray(params, float), times, out)
-        return out.reshape(shape)
+    # ``params`` is a sequence of numbers, or (for a ModelFamily) of arrays that
+    # broadcast against the states' batch shape: one model per member.
+    @staticmethod
+    def _parameter_array(params) -> np.ndarray:
+        """``params`` as one array, shape ``(P,)`` or ``(..., P)`` for a family."""
+        parts = [np.asarray(value, float) for value in params]
+        shape = np.broadcast_shapes(*(part.shape for part in parts))
+        return np.stack([np.broadcast_to(part, shape) for part in parts], axis=-1)
 
-    def _tails(self, params) -> tuple[np.ndarray, np.ndarray, float]:
-        """``(mu, l, g)``: tail masses and lengths, shape (n,), and ``g``."""
-        n = self.n
-        masses = np.asarray(params[:n], float)
-        return np.cumsum(masses[::-1])[::-1], np.asarray(params[n : 2 * n], float), params[2 * n]
+    def _batch(self, kind, theta, other, params, t=0.0):
+        table = self._parameter_array(params)
+        times = np.asarray(t, float)
+        shape = np.broadcast_shapes(np.shape(theta)[:-1], np.shape(other)[:-1],
+                                    table.shape[:-1], times.shape)
+        full = (*shape, self.n)
+
+        def rows_of(array, width):  # a writable C-ordered copy (the kernels take no views)
+            return np.array(np.broadcast_to(array, (*shape, width)).reshape(-1, width), float)
+
+        flat, others = rows_of(np.asarray(theta, float), self.n), rows_of(other, self.n)
+        rows = table.reshape(1, -1) if table.ndim == 1 else rows_of(table, table.shape[-1])
+        out = np.empty_like(flat)
+        _rows(kind, flat, others, rows, rows_of(times[..., None], 1)[:, 0].copy(), out)
+        return out.reshape(full)
+
+    def _tails(self, params) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(mu, l, g)``: tail masses and lengths, shape (..., n), and ``g``, shape (...)."""
+        n, table = self.n, self._parameter_array(params)
+        masses = table[..., :n]
+        tails = np.flip(np.cumsum(np.flip(masses, axis=-1), axis=-1), axis=-1)
+        return tails, table[..., n : 2 * n], table[..., 2 * n]
 
     def _coupling(self, params) -> np.ndarray:
-        """``mu_max(i,j) l_i l_j``, shape (n, n)."""
+        """``mu_max(i,j) l_i l_j``, shape (..., n, n)."""
         tails, lengths, _ = self._tails(params)
         index = np.arange(self.n)
-        return tails[np.maximum.outer(index, index)] * np.multiply.outer(lengths, lengths)
+        return (tails[..., np.maximum.outer(index, index)] * lengths[..., :, None]
+                * lengths[..., None, :])
 
     def _differences(self, theta):
         """``cos`` and ``sin`` of ``theta_i - theta_j``, each shape (..., n, n)."""
@@ -320,13 +340,18 @@ class LoopedChain:
         return -g * np.sum(tails * lengths * np.cos(np.asarray(theta, float)), axis=-1)
 
     def damping_matrix(self, params) -> np.ndarray:
-        """``C``, tridiagonal: ``C_ii = c_i + c_(i+1)``, ``C_(i,i+1) = -c_(i+1)``."""
-        n = self.n
+        """``C``, tridiagonal: ``C_ii = c_i + c_(i+1)``, ``C_(i,i+1) = -c_(i+1)``; (..., n, n)."""
+        n, table = self.n, self._parameter_array(params)
+        result = np.zeros((*table.shape[:-1], n, n))
         if not self.forced:
-            return np.zeros((n, n))
-        below = np.append(np.asarray(params[2 * n + 1 : 3 * n + 1], float)[1:], 0.0)
-        joints = np.asarray(params[2 * n + 1 : 3 * n + 1], float)
-        return np.diag(joints + below) - np.diag(below[:-1], 1) - np.diag(below[:-1], -1)
+            return result
+        joints = table[..., 2 * n + 1 : 3 * n + 1]
+        index = np.arange(n)
+        result[..., index, index] = joints
+        result[..., index[:-1], index[:-1]] += joints[..., 1:]
+        result[..., index[:-1], index[1:]] = -joints[..., 1:]
+        result[..., index[1:], index[:-1]] = -joints[..., 1:]
+        return result
 
     # Second derivatives of L, with a = mu_max(i,j) l_i l_j and the off-diagonal
     # entries first; each diagonal entry is minus the sum of its row's others
@@ -338,7 +363,8 @@ class LoopedChain:
         cos, _ = self._differences(theta)
         tails, lengths, g = self._tails(params)
         off = self._coupling(params) * cos * omega[..., :, None] * omega[..., None, :]
-        return self._with_diagonal(off, -g * tails * lengths * np.cos(np.asarray(theta, float)))
+        gravity = -np.asarray(g)[..., None] * tails * lengths * np.cos(np.asarray(theta, float))
+        return self._with_diagonal(off, gravity)
 
     def lag_qw(self, theta, omega, params):
         """``d^2 L / dtheta domega``: ``-a_ik sin(theta_i - theta_k) omega_i`` off the diagonal;

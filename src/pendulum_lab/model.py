@@ -86,7 +86,7 @@ class _CompiledChain:
         self._forcing = _lambdify((*state_args, chain.t), chain.forcing, (n,))
         self._generalized_forces = _lambdify((*state_args, chain.t), chain.generalized_forces,
                                              (n,))
-        self._damping_matrix = sp.lambdify(chain.parameters, chain.damping_matrix)
+        self._damping_matrix = _lambdify(chain.parameters, chain.damping_matrix, (n, n))
         self._dlagrangian_dq = _lambdify(state_args, lag_dq, (n,))
         self._kinetic = _lambdify(state_args, [chain.kinetic], ())
         self._potential = _lambdify(config_args, [chain.potential], ())
@@ -125,7 +125,7 @@ class _CompiledChain:
         return self._potential(*_config(theta, params))
 
     def damping_matrix(self, params):
-        return np.asarray(self._damping_matrix(*params), float)
+        return self._damping_matrix(*params)
 
     def lag_qq(self, theta, omega, params):
         return self._lag_qq(*_state(theta, omega, params))
@@ -222,20 +222,29 @@ class PendulumModel:
         self.forced = not (self.is_conservative and self.is_autonomous)
         self.chain = derive_chain(self.n, self.forced)
         self._fn = _compiled(self.n, self.forced)
-        self._params = (*self.masses, *self.lengths, self.g)
-        if self.forced:
-            self._params += (*self.damping, self.drive_amplitude, self.drive_frequency or 0.0)
+        self._params = self._parameters(self.forced)
+
+    #: Shape of the parameters: ``()`` for one model; a
+    #: :class:`~pendulum_lab.family.ModelFamily` has one model per entry.
+    shape: tuple = ()
+
+    def _parameters(self, forced: bool) -> tuple:
+        """The numbers of ``Chain.parameters`` (of the forced chain if ``forced``)."""
+        params = (*self.masses, *self.lengths, self.g)
+        if forced:
+            params += (*self.damping, self.drive_amplitude, self.drive_frequency or 0.0)
+        return params
 
     # ---- forces ------------------------------------------------------------
     @property
     def is_conservative(self) -> bool:
         """No damping: the mechanical energy changes only by the drive's work."""
-        return not any(self.damping)
+        return not any(np.any(np.asarray(c) != 0) for c in self.damping)
 
     @property
     def is_autonomous(self) -> bool:
         """No drive: the equations do not depend on time."""
-        return self.drive_amplitude == 0
+        return not np.any(np.asarray(self.drive_amplitude) != 0)
 
     @property
     def drive_period(self) -> float | None:
@@ -243,20 +252,22 @@ class PendulumModel:
         return None if self.drive_frequency is None else 2 * np.pi / self.drive_frequency
 
     @property
-    def conformal_damping_rate(self) -> float | None:
+    def conformal_damping_rate(self):
         """``gamma`` when damping makes ``dp/dt = -H_q - gamma p`` (a conformal field), else None.
 
         Zero without damping. For one link the damping torque ``-c omega``
         is ``-(c / (m l^2)) p``: conformal, with ``gamma = c / (m l^2)``. For
         ``n >= 2`` joint damping gives ``dp/dt = -H_q - C M(theta)^-1 p``,
-        whose rate depends on ``theta``: not conformal, so None.
+        whose rate depends on ``theta``: not conformal, so None. (For a
+        :class:`~pendulum_lab.family.ModelFamily`, an array of its shape.)
         """
         if self.is_conservative:
             return 0.0
         if self.n > 1:
             return None
         # one link: M = m l^2 is constant
-        return self.damping[0] / float(self.mass_matrix_at([0.0])[0, 0])
+        rate = self.damping[0] / self.mass_matrix_at(np.zeros(1))[..., 0, 0]
+        return float(rate) if np.ndim(rate) == 0 else rate
 
     def replace(self, **changes) -> PendulumModel:
         """A copy with some constructor arguments changed (``masses``, ``lengths``, ``g``,
@@ -284,6 +295,42 @@ class PendulumModel:
         # Pickled as its constructor call (for Dask workers, see pendulum_lab.cluster): the
         # compiled functions it holds cannot be pickled, and a worker builds its own.
         return functools.partial(PendulumModel, self.n, **self._arguments()), ()
+
+    def family(self, **values):
+        """Copies of this model, one per entry of an array of parameter values.
+
+        Parameters
+        ----------
+        **values : array_like
+            Values of ``damping``, ``drive_amplitude``, ``drive_frequency``
+            or ``g`` (one number per member; several arrays broadcast
+            against each other).
+
+        Returns
+        -------
+        pendulum_lab.family.ModelFamily
+            Give it to :func:`~pendulum_lab.simulate` with an ensemble of
+            initial states whose shape its shape broadcasts to: member ``k``
+            runs with its own parameters, all in one run.
+
+        Examples
+        --------
+        >>> import pendulum_lab as pl
+        >>> family = pl.driven_pendulum().family(drive_amplitude=[1.0, 1.2, 1.5])
+        >>> family.shape, family.drive_amplitude.tolist()
+        ((3,), [1.0, 1.2, 1.5])
+        """
+        from .family import ModelFamily
+
+        return ModelFamily(self, values)
+
+    def for_ensemble(self, batch_shape: tuple) -> PendulumModel:
+        """The model of each member of a flattened ensemble of ``batch_shape``: this one.
+
+        A :class:`~pendulum_lab.family.ModelFamily` answers with its members
+        broadcast to ``batch_shape`` and flattened, one per row of the run.
+        """
+        return self
 
     # ---- symbolic views (parameters symbolic) -----------------------------
     @property
@@ -409,7 +456,7 @@ class PendulumModel:
     def positions(self, theta) -> tuple[np.ndarray, np.ndarray]:
         """Cartesian bob positions ``(x, y)``, each shape ``(..., n)``, pivot at the origin."""
         theta = np.asarray(theta, float)
-        lengths = np.asarray(self.lengths)
+        lengths = np.stack(np.broadcast_arrays(*self.lengths), axis=-1)
         return (np.cumsum(lengths * np.sin(theta), axis=-1),
                 -np.cumsum(lengths * np.cos(theta), axis=-1))
 

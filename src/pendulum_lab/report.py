@@ -8,9 +8,11 @@ methods and, labelled as such, with the report's velocity-variable versions -
 one overview of the energy errors per pendulum, and ``summary.md`` with a table
 of energy drift, observed order, symplecticity defect and wall time.
 
-The same study is available from Python as :func:`run_report`. Its figures
-are drawn by :mod:`pendulum_lab.plotting` and its table by
-:mod:`pendulum_lab.tables`; this module holds only the study and its command.
+The same study is available from Python as :func:`run_report`. Its runs and
+table rows come from :func:`pendulum_lab.analysis.compare_methods` (which
+notebook 09 calls too), its figures from :mod:`pendulum_lab.plotting` and its
+table from :mod:`pendulum_lab.tables`; this module holds only the study's
+output and its command.
 
 Examples
 --------
@@ -35,9 +37,9 @@ from matplotlib.figure import Figure
 
 from . import __version__, analysis, plotting
 from . import _validation as check
-from .integrators import METHODS, ConvergenceError, get_method
+from .integrators import METHODS, get_method
 from .model import double_pendulum, simple_pendulum
-from .simulate import Trajectory, simulate
+from .simulate import Trajectory
 from .tables import markdown_table
 
 __all__ = [
@@ -185,43 +187,25 @@ def run_report(
     pendulums = check.choices("pendulums", pendulums, PENDULUMS)
     out = check.output_folder("out", out)
 
-    from tqdm.auto import tqdm
-
     start = time.perf_counter()
-    rows, failures, figures = [], [], []
-    bar = tqdm(
-        total=len(pendulums) * len(methods), disable=not progress, unit="run", file=sys.stderr
-    )
-    try:
-        for pendulum in pendulums:
-            factory, theta0 = PENDULUMS[pendulum]
-            model = factory()
-            omega0 = (0.0,) * model.n
-            # one DOP853 reference for the order fits of all methods
-            reference = analysis.reference_solution(model, theta0, omega0, t_end=1.0)
-            done = []
-            for name in methods:
-                bar.set_description(f"{pendulum} {name}")
-                try:
-                    traj = simulate(
-                        model, theta0, omega0, t_end=t_end, dt=dt, method=name, progress=False
-                    )
-                except ConvergenceError as err:
-                    failures.append((pendulum, name, str(err)))
-                    bar.update(1)
-                    continue
-                rows.append(analysis.compare_trajectory(model, traj, reference=reference))
-                figures.append(
-                    _save(_energy_figure(traj, pendulum), out / f"energy_{pendulum}_{name}.png")
-                )
-                done.append(traj)
-                bar.update(1)
-            if done:
-                figures.append(
-                    _save(_error_overview(done, pendulum), out / f"energy_error_{pendulum}.png")
-                )
-    finally:
-        bar.close()
+    problems = []
+    for pendulum in pendulums:
+        factory, theta0 = PENDULUMS[pendulum]
+        model = factory()
+        problems.append((model, theta0, (0.0,) * model.n))
+    study = analysis.compare_methods(problems, methods, t_end=t_end, dt=dt, progress=progress)
+    figures = []
+    for pendulum, done in study.trajectories.items():
+        for traj in done:
+            name = traj.method.name
+            figures.append(
+                _save(_energy_figure(traj, pendulum), out / f"energy_{pendulum}_{name}.png")
+            )
+        if done:
+            figures.append(
+                _save(_error_overview(done, pendulum), out / f"energy_error_{pendulum}.png")
+            )
+    rows, failures = study.rows, study.failures
     elapsed = time.perf_counter() - start
     summary = out / "summary.md"
     summary.write_text(

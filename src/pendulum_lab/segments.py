@@ -8,7 +8,10 @@ dropped. :func:`simulate_segments` cuts a run into consecutive
 * each segment starts exactly where the previous one ended, in the method's
   own variables (``(theta, p)`` for the canonical methods), and at the right
   time ``t`` (the ``t0`` of its :func:`~pendulum_lab.simulate` call), so the
-  segmented run is the same run as one long call, to the last bit;
+  segmented run is the same run as one long call, to the last bit (for a
+  field that depends on time, a driven one, up to the rounding of the step
+  times: a segment counts ``t0 + (s - 1) dt`` from its own start, which can
+  differ from the long call's in the last bit);
 * the steps are counted once, by :func:`~pendulum_lab.step_count`, and one
   progress bar covers the whole run;
 * between segments the caller may drop ensemble members it is done with
@@ -84,6 +87,8 @@ class SegmentedRun:
     Attributes
     ----------
     model : PendulumModel
+        The model of the run; for a :class:`~pendulum_lab.family.ModelFamily`,
+        one member per running member (flat), so that it fits the segments.
     method : Method
     dt, t_end : float
     t0 : float
@@ -111,11 +116,12 @@ class SegmentedRun:
     def __init__(self, model, theta0, start, given_momenta: bool, *, method, dt: float,
                  t_end: float, n_steps: int, save_every: int, segment_steps: int, t0: float,
                  progress, label: str):
-        self.model, self.method, self.dt, self.t0, self.t_end = model, method, dt, t0, t_end
+        self.method, self.dt, self.t0, self.t_end = method, dt, t0, t_end
         self.n_steps, self.save_every, self.segment_steps = n_steps, save_every, segment_steps
         self.batch_shape = theta0.shape[:-1]
+        self.model = model.for_ensemble(self.batch_shape)
         self._theta = theta0.reshape(-1, model.n).copy()
-        self._state = to_method_variables(model, method, self._theta,
+        self._state = to_method_variables(self.model, method, self._theta,
                                            start.reshape(-1, model.n), given_momenta)
         self.members = np.arange(self._theta.shape[0])
         self.done = 0
@@ -165,6 +171,8 @@ class SegmentedRun:
                              f"running member), got {mask.shape}")
         self.members = self.members[mask]
         self._theta, self._state = self._theta[mask], self._state[mask]
+        if self.model.shape:
+            self.model = self.model.select(mask)
 
     def restart(self, theta, p, where=None) -> None:
         """Go on from ``(theta, p)`` instead of the current state.
@@ -192,7 +200,8 @@ class SegmentedRun:
         # Copies: the current state is a view into the last segment handed out.
         self._theta, self._state = self._theta.copy(), self._state.copy()
         self._theta[where] = theta
-        self._state[where] = to_method_variables(self.model, self.method, theta, p,
+        moved = self.model.select(where) if self.model.shape else self.model
+        self._state[where] = to_method_variables(moved, self.method, theta, p,
                                                   given_momenta=True)
 
 

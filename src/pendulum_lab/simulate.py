@@ -25,9 +25,7 @@ from . import _validation as check
 from . import codegen
 from .integrators import (
     CALLS,
-    CONFORMAL_METHODS,
     MAX_SWEEPS,
-    METHODS,
     NOT_CONVERGED,
     NOT_FINITE,
     RUNNING,
@@ -39,21 +37,22 @@ from .integrators import (
     Method,
     get_method,
     run,
+    step_kernels,
     suitable_methods,
     unsuitability,
 )
-from .model import PendulumModel, driven_pendulum, n_pendulum
+from .model import PendulumModel
 
 __all__ = [
     "Trajectory",
     "canonical_state",
     "hamiltonian_field",
+    "henon_step",
     "progress_bar",
     "simulate",
     "step",
     "step_count",
     "velocity_state",
-    "warm_up",
 ]
 
 # Show a progress bar by default once a run does this many state updates
@@ -127,20 +126,33 @@ class Trajectory:
 def _field(n: int, forced: bool, params: tuple, separable: bool,
            damping_rate: float) -> HamiltonianField:
     kernels = codegen.load_kernels(n, forced)
+    # An unforced chain also has a discrete Lagrangian (variational methods).
+    discrete = None if forced else functools.partial(codegen.load_discrete_kernels, n)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
-                            np.array(params, dtype=float), separable, damping_rate)
+                            np.array(params, dtype=float), separable, damping_rate, discrete)
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
-    """The model's compiled vector field (Hamiltonian, plus its forces), as integrators see it."""
+    """The model's compiled vector field (Hamiltonian, plus its forces), as integrators see it.
+
+    For a :class:`~pendulum_lab.family.ModelFamily` the parameters come as one
+    row per member (its shape flattened), and so do the damping rates.
+    """
     rate = model.conformal_damping_rate
-    return _field(model.n, model.forced, tuple(model.parameter_values.values()), model.separable,
-                  np.nan if rate is None else rate)
+    if not model.shape:
+        return _field(model.n, model.forced, tuple(model.parameter_values.values()),
+                      model.separable, np.nan if rate is None else rate)
+    kernels = codegen.load_kernels(model.n, model.forced)
+    rows = np.stack(np.broadcast_arrays(*model.parameter_values.values()), axis=-1)
+    rates = np.broadcast_to(np.nan if rate is None else rate, model.shape)
+    return HamiltonianField(kernels.hamilton, kernels.acceleration,
+                            np.ascontiguousarray(rows.reshape(-1, rows.shape[-1])),
+                            model.separable, np.array(rates, dtype=float).reshape(-1))
 
 
 def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianField):
     """A ``ValueError`` naming the method and the reason if it cannot integrate ``model``."""
-    reason = unsuitability(method, field.damping_rate)
+    reason = unsuitability(method, field)
     if reason is None:
         return
     if model.conformal_damping_rate is None:
@@ -149,7 +161,7 @@ def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianF
                    "conformal (conformal methods take one link)")
     raise ValueError(f"`method` {method.name!r} cannot integrate this model (damping "
                      f"{model.damping}): {reason}. Methods that can: "
-                     f"{suitable_methods(field.damping_rate)}")
+                     f"{suitable_methods(field)}")
 
 
 def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_step,
@@ -163,12 +175,13 @@ def _advance(method: Method, field: HamiltonianField, q, p, h, n_steps, first_st
     loop releases the GIL, so the slices run in parallel threads.
     """
     loop, step_kernel = run.compiled, method.kernel.compiled  # compile before any threads
+    first_kernel, second_kernel = step_kernels(method, field)
     params = np.atleast_2d(np.asarray(field.params, dtype=float))
     rates = np.atleast_1d(np.asarray(field.damping_rate, dtype=float))
     per_member = params.shape[0] > 1
 
     def advance(rows):
-        loop(step_kernel, field.hamilton, field.acceleration, field.separable,
+        loop(step_kernel, first_kernel, second_kernel, field.separable,
              rates[rows] if per_member else rates, q[rows], p[rows], float(t0), float(h),
              n_steps, first_step, save_every, params[rows] if per_member else params,
              saved_q[rows], saved_p[rows], stats[rows])
@@ -301,7 +314,8 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     dt : float
         Step size [s], non-zero.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``.
+        A key of :data:`pendulum_lab.METHODS`, ``CONFORMAL_METHODS`` or
+        ``VARIATIONAL_METHODS``.
     p0 : array_like, shape like ``theta0``, optional
         Canonical momenta instead of ``omega0`` (give exactly one).
     t0 : float
@@ -332,22 +346,178 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     if dt == 0:
         raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
     t0 = check.real_number("t0", t0)
-    field = hamiltonian_field(model)
-    _check_method_fits(model, method, field)
     shape = theta0.shape
+    row_models = model.for_ensemble(shape[:-1])
+    field = hamiltonian_field(row_models)
+    _check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
     y = start.reshape(-1, model.n)
-    y = to_method_variables(model, method, q, y, given_momenta=p0 is not None)
-    unused = np.empty((q.shape[0], 1, model.n))
+    y = to_method_variables(row_models, method, q, y, given_momenta=p0 is not None)
+    _step_rows(method, field, q, y, dt, f"dt = {dt:g}", t0=t0)
+    if method.variables == "velocity":
+        y = row_models.momenta(q, y)
+    return q.reshape(shape), y.reshape(shape)
+
+
+def _step_rows(method: Method, field: HamiltonianField, q: np.ndarray, y: np.ndarray,
+               h: float, what: str, t0: float = 0.0) -> None:
+    """One step of ``method`` on ``field`` from time ``t0`` for every row of ``q, y``, in place.
+
+    ``q`` and ``y`` are C arrays; ``what`` names the step in the error raised
+    if the implicit equations fail.
+    """
+    unused = np.empty((q.shape[0], 1, q.shape[1]))
     stats = np.zeros((q.shape[0], 4), dtype=np.int64)
-    _advance(method, field, q, y, dt, 1, 0, 2, unused, unused, stats, t0=t0)
+    _advance(method, field, q, y, h, 1, 0, 2, unused, unused, stats, t0=t0)
     if np.any(stats[:, STATUS] == NOT_CONVERGED):
         raise ConvergenceError(f"{method.name}: the implicit equations did not converge "
-                               f"within {MAX_SWEEPS} iterations (dt = {dt:g})")
-    if method.variables == "velocity":
-        y = model.momenta(q, y)
-    return q.reshape(shape), y.reshape(shape)
+                               f"within {MAX_SWEEPS} iterations ({what})")
+
+
+@functools.cache
+def _henon_kernel(n: int, forced: bool, link: int):
+    """Hamilton's equations of ``n`` links with ``theta_link`` as the independent variable.
+
+    The compiled kernel has the signature of every vector field, on states of
+    length ``n + 1``: ``q = (theta, t)`` and ``p = (p, w)``, where ``w`` is the
+    distance ``level - theta_link`` to go, constant along the step. With
+    ``s`` in ``[0, 1]`` and ``theta_link = theta_link(0) + s w``, it writes
+    ``dy/ds = w f(t, y) / theta_link'`` and ``dt/ds = w / theta_link'``; the
+    ``theta_link`` component is exactly ``w``, so any Runge-Kutta step of
+    length 1 ends on the surface up to the rounding of its final sum. The
+    integrator's own time argument is ``s``; the field reads the time from
+    ``q[n]`` (a driven model's drive depends on it).
+    """
+    import numba
+
+    from ._signatures import HAMILTON
+
+    hamilton = codegen.load_kernels(n, forced).hamilton
+
+    def rescaled(s, q, p, params, dq, dp):
+        theta, momenta = q[:n].copy(), p[:n].copy()
+        dtheta, dmomenta = np.empty(n), np.empty(n)
+        hamilton(q[n], theta, momenta, params, dtheta, dmomenta)
+        width = p[n]
+        scale = width / dtheta[link]
+        for i in range(n):
+            dq[i] = dtheta[i] * scale
+            dp[i] = dmomenta[i] * scale
+        dq[link] = width
+        dq[n] = scale
+        dp[n] = 0.0
+
+    # error_model="numpy": a vanishing theta_link' gives inf, caught by the caller, not an
+    # exception inside the compiled loop
+    return numba.njit(HAMILTON, error_model="numpy")(rescaled)
+
+
+def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, method="glrk4",
+               p0=None, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One step of ``method`` that ends exactly on the surface ``theta_link = level``.
+
+    Henon's trick [Henon]_: where ``theta_link`` changes monotonically it can
+    replace the time as the independent variable, ``dy/dtheta_link = f(y) /
+    theta_link'`` and ``dt/dtheta_link = 1 / theta_link'``. One step of the
+    integrator on this rescaled field, of length ``level - theta_link``, takes
+    the state onto the surface: no iteration, and the crossing time comes out
+    as one more component of the state. The step is the method's own (the
+    same tableau or the same kick-drift formulas), applied to the rescaled
+    field; so its error is of the method's order in the distance travelled.
+
+    Each member of a batch has its own distance to go; the step is written in
+    ``s = (theta_link - theta_link(0)) / (level - theta_link(0))`` in ``[0, 1]``
+    (see :func:`_henon_kernel`) so that a batch takes one step together.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0 : array_like, shape (n,) or (..., n)
+        Angles [rad] near the surface.
+    omega0 : array_like, shape like ``theta0``, optional
+        Angular velocities [rad/s]; or give ``p0``.
+    link : int
+        The link whose angle defines the surface (0-based).
+    level : float or array_like, shape ``theta0.shape[:-1]``
+        The surface ``theta_link = level`` [rad], one per member if an array.
+    method : str or Method
+        A key of :data:`pendulum_lab.METHODS` in canonical variables (the
+        report's velocity-variable methods hard-code ``theta' = omega``, which
+        the rescaled field breaks).
+    p0 : array_like, shape like ``theta0``, optional
+        Canonical momenta instead of ``omega0`` (give exactly one).
+    t0 : float
+        Time of the start state [s] (the drive of a driven model depends on
+        it; damping, if any, is integrated as part of the rescaled field).
+
+    Returns
+    -------
+    theta1, p1 : ndarray, shape like ``theta0``
+        The state on the surface (``theta1[..., link] == level`` up to one
+        rounding).
+    elapsed : ndarray, shape ``theta0.shape[:-1]`` (float for one state)
+        The time from the start to the surface [s]; negative if the surface
+        lies behind.
+
+    Raises
+    ------
+    FloatingPointError
+        If ``theta_link'`` vanishes on the way (the surface is not crossed).
+
+    References
+    ----------
+    .. [Henon] M. Henon, "On the numerical computation of Poincare maps",
+       Physica D 5 (1982) 412-414.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> theta1, p1, elapsed = pl.henon_step(pl.double_pendulum(), [-0.05, 0.3], [1.0, 0.0],
+    ...                                     link=0, level=0.0, method="rk4")
+    >>> bool(abs(theta1[0]) < 1e-16), round(elapsed, 3)     # on theta_1 = 0, after 0.046 s
+    (True, 0.046)
+    """
+    check.pendulum_model(model)
+    method = get_method(method)
+    field = hamiltonian_field(model)
+    _check_method_fits(model, method, field)
+    t0 = check.real_number("t0", t0)
+    if method.variables != "canonical":
+        raise ValueError(f"`method` must work in canonical variables for Henon's trick, got "
+                         f"{method.name!r} (it steps (theta, omega) with theta' = omega)")
+    link = check.index_below("link", link, model.n)
+    theta0, start = _initial_state(model, theta0, omega0, p0)
+    batch = theta0.shape[:-1]
+    level = np.asarray(level, dtype=float)
+    try:
+        level = np.broadcast_to(level, batch)
+    except ValueError:
+        raise ValueError(f"`level` must be a number or have shape {batch} (one per state), "
+                         f"got shape {level.shape}") from None
+    if not np.all(np.isfinite(level)):
+        raise ValueError("`level` must be finite")
+    n = model.n
+    theta = theta0.reshape(-1, n)
+    p = start.reshape(-1, n) if p0 is not None else model.momenta(theta, start.reshape(-1, n))
+    width = level.reshape(-1) - theta[:, link]
+    if np.any(model.dH_dp(theta, p)[:, link] == 0):
+        raise FloatingPointError(f"theta_{link}' vanishes at a start state: theta_{link} "
+                                 "cannot be the independent variable there")
+    q_ext = np.column_stack([theta, np.full(len(theta), t0)])
+    p_ext = np.column_stack([p, width])
+    # not separable, and any damping is part of the rescaled field (no conformal splitting)
+    rescaled = HamiltonianField(_henon_kernel(n, model.forced, link), field.acceleration,
+                                field.params, False, 0.0)
+    _step_rows(method, rescaled, q_ext, p_ext, 1.0, "Henon's step to the surface")
+    if not np.all(np.isfinite(q_ext)) or not np.all(np.isfinite(p_ext)):
+        raise FloatingPointError(
+            f"theta_{link}' vanishes between the state and the surface theta_{link} = level: "
+            "the step cannot take theta as its independent variable there"
+        )
+    elapsed = (q_ext[:, n] - t0).reshape(batch)
+    return (q_ext[:, :n].reshape(theta0.shape), p_ext[:, :n].reshape(theta0.shape),
+            float(elapsed) if not batch else elapsed)
 
 
 def to_method_variables(model, method, q, y, given_momenta: bool) -> np.ndarray:
@@ -412,6 +582,9 @@ def simulate(
     Parameters
     ----------
     model : PendulumModel
+        Or a :class:`~pendulum_lab.family.ModelFamily` (``model.family(...)``)
+        whose shape broadcasts to the ensemble shape ``...``: each member then
+        runs with its own parameters.
     theta0, omega0 : array_like, shape (n,) or (..., n)
         Initial angles [rad] and angular velocities [rad/s]. Leading axes
         make an ensemble, integrated together.
@@ -421,9 +594,11 @@ def simulate(
     dt : float
         Step size [s], ``> 0``.
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS` or ``CONFORMAL_METHODS``. On a
-        damped model the methods that assume a Hamiltonian
-        (``semi_implicit_euler``, ``leapfrog``) raise a ``ValueError``.
+        A key of :data:`pendulum_lab.METHODS`, ``CONFORMAL_METHODS`` or
+        ``VARIATIONAL_METHODS``. On a damped model the methods that assume a
+        Hamiltonian (``semi_implicit_euler``, ``leapfrog``, the variational
+        ones) raise a ``ValueError``; so do the variational methods on a driven
+        model.
     save_every : int
         Keep every ``save_every``-th state (memory for long runs and ensembles).
     p0 : array_like, shape like ``theta0``, optional
@@ -477,14 +652,16 @@ def simulate(
             raise ValueError("give `save_every` only with keep='all' (keep='final' keeps the "
                              "initial and the final state)")
         save_every = n_steps
-    field = hamiltonian_field(model)
+    batch_shape = theta0.shape[:-1]
+    # One model per row of the run (a family's members get their own parameters).
+    row_models = model.for_ensemble(batch_shape)
+    field = hamiltonian_field(row_models)
     _check_method_fits(model, method, field)
 
     n_saved = n_steps // save_every + 1
-    batch_shape = theta0.shape[:-1]
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    y = to_method_variables(model, method, q, start.reshape(-1, model.n),
+    y = to_method_variables(row_models, method, q, start.reshape(-1, model.n),
                              given_momenta=p0 is not None)
     members = q.shape[0]
     _check_memory(n_saved, members, model.n, t_end, dt, n_steps, save_every)
@@ -563,43 +740,3 @@ def simulate(
         wall_time=wall,
         completed=completed,
     )
-
-
-def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
-    """Compile now, or load from the disk cache, the kernels a course session uses.
-
-    Numba compiles each kernel the first time it runs on a machine (a few
-    seconds each) and keeps the machine code on disk. Calling this ahead of
-    time (``pendulum-lab warmup``; the Binder image does it while it is
-    built) spares students the wait.
-
-    Parameters
-    ----------
-    ns : sequence of int
-        Chain lengths (numbers of links) to prepare: 1 the simple pendulum
-        (and the driven pendulum's kernels), 2 the double pendulum, ...
-    methods : sequence of str, optional
-        Method names; all of :data:`pendulum_lab.METHODS` and
-        ``CONFORMAL_METHODS`` by default.
-    progress : bool
-        Show a progress bar.
-
-    Returns
-    -------
-    float
-        Seconds spent.
-    """
-    everything = [*METHODS, *CONFORMAL_METHODS]
-    names = [get_method(m).name for m in (everything if methods is None else methods)]
-    ns = [check.integer_at_least("ns", n, 1) for n in ns]
-    start = time.perf_counter()
-    jobs = [(n, name) for n in ns for name in names]
-    if progress:
-        from tqdm.auto import tqdm
-
-        jobs = tqdm(jobs, desc="compiling kernels", unit="kernel")
-    for n, name in jobs:
-        simulate(n_pendulum(n), np.full(n, 0.1), np.zeros(n), t_end=0.01, dt=0.01, method=name)
-    if 1 in ns:  # the step kernels take any field: one run compiles the forced field
-        simulate(driven_pendulum(), [0.1], [0.0], t_end=0.01, dt=0.01, method=names[0])
-    return time.perf_counter() - start

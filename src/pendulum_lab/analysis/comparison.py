@@ -1,8 +1,10 @@
-"""Comparing methods: work-precision, a DOP853 reference run, one table row per method.
+"""Comparing methods: work-precision, SciPy's adaptive solvers, one table row per method.
 
 Each function returns numbers a test or a notebook can assert on; the
 figures of these results are in :mod:`pendulum_lab.plotting` and their
-Markdown table in :mod:`pendulum_lab.tables`.
+Markdown table in :mod:`pendulum_lab.tables`. :func:`compare_methods` is the
+study behind the comparison table of notebook 09 and of ``pendulum-lab
+report``: both call it.
 """
 
 from __future__ import annotations
@@ -13,29 +15,43 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _validation as check
-from ..integrators import get_method
+from ..integrators import METHODS, ConvergenceError, get_method
 from ..model import PendulumModel
 from ..simulate import Trajectory, simulate, velocity_state
-from .accuracy import dop853, energy_growth, observed_order, order_steps
+from .accuracy import (
+    energy_growth,
+    final_state_at,
+    global_error,
+    observed_order,
+    order_steps,
+    reference_solution,
+    scipy_solution,
+)
 from .structure import reversibility_error, symplecticity_defect
 
 __all__ = [
+    "SCIPY_METHODS",
+    "AdaptiveRun",
     "ComparisonRow",
     "EnergyComparison",
-    "ReferenceRun",
+    "MethodComparison",
     "WorkPrecision",
     "compare_energy",
+    "compare_methods",
     "compare_trajectory",
-    "dop853_run",
     "dop853_work_precision",
     "pendulum_name",
+    "scipy_run",
     "work_precision",
 ]
+
+#: The adaptive solvers of ``scipy.integrate.solve_ivp`` the course compares with.
+SCIPY_METHODS = ("RK45", "DOP853")
 
 
 @dataclass(frozen=True)
 class WorkPrecision:
-    """Cost and energy accuracy of one run.
+    """Cost and accuracy of one run, by two measures.
 
     Attributes
     ----------
@@ -44,6 +60,11 @@ class WorkPrecision:
         The step ``dt`` for a fixed-step method, the tolerance ``rtol`` for DOP853.
     energy_error : float
         ``max |H - H(0)|`` over the saved states of the run.
+    state_error : float
+        The global error at the final time ``T``: max-norm distance in
+        ``(theta, omega)`` from a reference solution (:func:`global_error`).
+        Unlike the energy error, it does not favour the methods that keep
+        the energy near its initial value.
     wall_time : float
         Seconds spent integrating.
     evaluations : int
@@ -55,14 +76,16 @@ class WorkPrecision:
     method: str
     setting: float
     energy_error: float
+    state_error: float
     wall_time: float
     evaluations: int
     completed: bool
 
 
 def work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float, dts,
-                   method="glrk4", p0=None, repeats: int = 1) -> list[WorkPrecision]:
-    """Energy error against cost for a fixed-step method at several step sizes.
+                   method="glrk4", p0=None, repeats: int = 1,
+                   reference=None) -> list[WorkPrecision]:
+    """Energy error and global error against cost for a fixed-step method at several steps.
 
     Parameters
     ----------
@@ -70,12 +93,16 @@ def work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float, d
     theta0, omega0, p0 : array_like, shape (n,)
         The initial state (give ``omega0`` or ``p0``).
     t_end : float
+        Length of each run; each step of ``dts`` must divide it into whole steps.
     dts : sequence of float
         Step sizes, each ``> 0``.
     method : str or Method
     repeats : int
         Run each step size this many times and keep the shortest wall time
         (runs of a few milliseconds are noisy), ``>= 1``.
+    reference : (ndarray, ndarray), optional
+        ``(theta, omega)`` at ``t_end``; by default :func:`reference_solution`.
+        Pass one to share it between methods.
 
     Returns
     -------
@@ -84,52 +111,80 @@ def work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float, d
     """
     method = get_method(method)
     repeats = check.integer_at_least("repeats", repeats, 1)
+    if reference is None:
+        reference = reference_solution(model, theta0, omega0, t_end=t_end, p0=p0)
     points = []
     for dt in dts:
         runs = [simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method, p0=p0,
                          progress=False) for _ in range(repeats)]
         traj = runs[0]
+        error = (global_error(*final_state_at(traj, t_end), reference) if traj.completed
+                 else np.inf)
         points.append(WorkPrecision(method.name, float(dt),
-                                    float(np.max(np.abs(traj.energy_error))),
+                                    float(np.max(np.abs(traj.energy_error))), error,
                                     min(run.wall_time for run in runs), traj.evaluations,
                                     traj.completed))
     return points
 
 
 @dataclass(frozen=True)
-class ReferenceRun:
-    """A run of SciPy's adaptive DOP853.
+class AdaptiveRun:
+    """A run with variable steps: SciPy's adaptive solvers, or an adaptive geometric method.
 
     Attributes
     ----------
+    label : str
+        The method and its setting, for legends and tables.
     t : ndarray, shape (N+1,)
-        The solver's accepted step times.
-    theta, omega : ndarray, shape (N+1, n)
+        The accepted step times [s].
+    theta, p : ndarray, shape (N+1, n)
+        Angles and canonical momenta.
     energy_error : ndarray, shape (N+1,)
         ``E(t) - E(0)``.
-    rtol : float
-    wall_time : float
+    steps : int
+        Accepted steps.
     evaluations : int
-        Right-hand-side evaluations (``nfev``), each one acceleration.
+        Right-hand-side evaluations (SciPy: ``nfev``, one acceleration each)
+        or one-step calls (adaptive leapfrogs, counting rejected attempts
+        and error estimates).
+    wall_time : float
+        Seconds spent integrating.
     """
 
+    label: str
     t: np.ndarray
     theta: np.ndarray
-    omega: np.ndarray
+    p: np.ndarray
     energy_error: np.ndarray
-    rtol: float
-    wall_time: float
+    steps: int
     evaluations: int
+    wall_time: float
+
+    @property
+    def step_sizes(self) -> np.ndarray:
+        """``t[k+1] - t[k]``, shape (N,)."""
+        return np.diff(self.t)
+
+    @property
+    def drift(self) -> float:
+        """Slope [J/s] of a least-squares line through the energy error."""
+        return float(np.polyfit(self.t, self.energy_error, 1)[0])
+
+    def largest_error(self, start: float = 0.0, stop: float = np.inf) -> float:
+        """``max |E - E(0)|`` over ``start <= t <= stop``."""
+        inside = (self.t >= start) & (self.t <= stop)
+        return float(np.max(np.abs(self.energy_error[inside])))
 
 
-def dop853_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
-               rtol: float = 1e-10, p0=None) -> ReferenceRun:
-    """Integrate with ``scipy.integrate.solve_ivp(method="DOP853")``.
+def scipy_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
+              method: str = "DOP853", rtol: float = 1e-10, p0=None) -> AdaptiveRun:
+    """Integrate with ``scipy.integrate.solve_ivp``, keeping every accepted step.
 
-    This is the general-purpose adaptive eighth-order method a student would
-    otherwise reach for; it is neither symplectic nor fixed-step. It steps
-    ``(theta, omega)`` with the model's accelerations (one evaluation per
-    right-hand side, as for the velocity methods); ``atol`` equals ``rtol``.
+    These are the general-purpose adaptive methods a student would otherwise
+    reach for (DOP853: eighth order; RK45: Dormand-Prince 5(4)); neither is
+    symplectic nor fixed-step. They step ``(theta, omega)`` with the model's
+    accelerations (one evaluation per right-hand side, as for the velocity
+    methods); ``atol`` equals ``rtol``.
 
     Parameters
     ----------
@@ -138,36 +193,53 @@ def dop853_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
         The initial state (give ``omega0`` or ``p0``).
     t_end : float
         ``> 0``.
+    method : {"RK45", "DOP853"}
     rtol : float
         Relative (and absolute) tolerance, in ``[1e-14, 1e-2]``.
 
     Returns
     -------
-    ReferenceRun
+    AdaptiveRun
+        Labelled ``"<method>, rtol <rtol>"``.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> run = scipy_run(pl.simple_pendulum(), [1.0], [0.0], t_end=10.0, method="RK45", rtol=1e-6)
+    >>> run.label, bool(run.largest_error() < 1e-3)
+    ('RK45, rtol 1e-06', True)
     """
-    n = model.n
     theta0, omega0 = velocity_state(model, theta0, omega0, p0, single=True)
+    n = model.n
     t_end = check.positive_number("t_end", t_end)
+    method = check.choice("method", method, SCIPY_METHODS)
     rtol = check.number_in("rtol", rtol, 1e-14, 1e-2)
     start = time.perf_counter()
-    sol = dop853(model, theta0, omega0, t_end, rtol)
+    sol = scipy_solution(model, theta0, omega0, t_end, rtol, method)
     wall = time.perf_counter() - start
     theta, omega = sol.y[:n].T, sol.y[n:].T
     energy = model.energy(theta, omega)
-    return ReferenceRun(sol.t, theta, omega, energy - energy[0], rtol, wall, int(sol.nfev))
+    return AdaptiveRun(f"{method}, rtol {rtol:g}", sol.t, theta, model.momenta(theta, omega),
+                       energy - energy[0], len(sol.t) - 1, int(sol.nfev), wall)
 
 
 def dop853_work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float,
-                          rtols, p0=None, repeats: int = 1) -> list[WorkPrecision]:
+                          rtols, p0=None, repeats: int = 1,
+                          reference=None) -> list[WorkPrecision]:
     """:func:`work_precision` for DOP853 at several tolerances ``rtols``."""
     repeats = check.integer_at_least("repeats", repeats, 1)
+    if reference is None:
+        reference = reference_solution(model, theta0, omega0, t_end=t_end, p0=p0)
     points = []
     for rtol in rtols:
-        runs = [dop853_run(model, theta0, omega0, t_end=t_end, rtol=rtol, p0=p0)
+        runs = [scipy_run(model, theta0, omega0, t_end=t_end, rtol=rtol, p0=p0)
                 for _ in range(repeats)]
+        run = runs[0]
+        omega_end = model.velocities(run.theta[-1], run.p[-1])
         points.append(WorkPrecision("DOP853", float(rtol),
-                                    float(np.max(np.abs(runs[0].energy_error))),
-                                    min(run.wall_time for run in runs), runs[0].evaluations, True))
+                                    float(np.max(np.abs(run.energy_error))),
+                                    global_error(run.theta[-1], omega_end, reference),
+                                    min(r.wall_time for r in runs), run.evaluations, True))
     return points
 
 
@@ -291,6 +363,91 @@ def compare_trajectory(model: PendulumModel, traj: Trajectory, *, order_t_end: f
         mean_iterations=traj.mean_iterations,
         completed=traj.completed,
     )
+
+
+@dataclass(frozen=True)
+class MethodComparison:
+    """Every method on every problem: see :func:`compare_methods`.
+
+    Attributes
+    ----------
+    rows : list of ComparisonRow
+        One per run that completed its implicit equations, in run order.
+    trajectories : dict
+        ``{pendulum name: [Trajectory, ...]}``, the runs behind ``rows``.
+    failures : list of (str, str, str)
+        ``(pendulum, method, message)`` for runs whose implicit equations did
+        not converge.
+    """
+
+    rows: list
+    trajectories: dict
+    failures: list
+
+
+def compare_methods(problems, methods=tuple(METHODS), *, t_end: float = 200.0,
+                    dt: float = 0.01, progress: bool = False) -> MethodComparison:
+    """Run each method on each problem and measure it: the comparison table.
+
+    For each problem, one DOP853 reference at ``t = 1 s`` serves the order
+    fits of all methods; each method runs ``t_end`` at step ``dt`` and
+    :func:`compare_trajectory` turns the run into a :class:`ComparisonRow`.
+    Notebook 09 and ``pendulum-lab report`` both build their table with this
+    function.
+
+    Parameters
+    ----------
+    problems : sequence of (PendulumModel, array_like, array_like)
+        ``(model, theta0, omega0)`` for each pendulum.
+    methods : sequence of str
+        Keys of :data:`pendulum_lab.METHODS`; all of them by default.
+    t_end, dt : float
+        Length and step of every run [s].
+    progress : bool
+        Show a progress bar over the runs.
+
+    Returns
+    -------
+    MethodComparison
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> result = compare_methods([(pl.simple_pendulum(), [1.0], [0.0])], ["rk4", "leapfrog"],
+    ...                          t_end=2.0)
+    >>> [(row.pendulum, row.method, round(row.observed_order)) for row in result.rows]
+    [('simple', 'rk4', 4), ('simple', 'leapfrog', 2)]
+    """
+    methods = check.choices("methods", methods, METHODS)
+    problems = list(problems)
+    for problem in problems:
+        if not (isinstance(problem, tuple | list) and len(problem) == 3):
+            raise TypeError("`problems` must hold (model, theta0, omega0) triples, got "
+                            f"{problem!r}")
+        check.pendulum_model(problem[0])
+    from tqdm.auto import tqdm
+
+    rows, failures, trajectories = [], [], {}
+    bar = tqdm(total=len(problems) * len(methods), disable=not progress, unit="run")
+    try:
+        for model, theta0, omega0 in problems:
+            pendulum = pendulum_name(model)
+            reference = reference_solution(model, theta0, omega0, t_end=1.0)
+            runs = trajectories.setdefault(pendulum, [])
+            for name in methods:
+                bar.set_description(f"{pendulum} {name}")
+                try:
+                    traj = simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=name,
+                                    progress=False)
+                except ConvergenceError as err:
+                    failures.append((pendulum, name, str(err)))
+                else:
+                    rows.append(compare_trajectory(model, traj, reference=reference))
+                    runs.append(traj)
+                bar.update(1)
+    finally:
+        bar.close()
+    return MethodComparison(rows, trajectories, failures)
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ __all__ = [
     "find_equilibrium",
     "linearized_solution",
     "normal_mode_frequencies",
+    "normal_modes",
     "rest_state_at_energy",
 ]
 
@@ -58,11 +59,47 @@ def equilibrium_angles(model: PendulumModel, equilibrium=None) -> np.ndarray:
     return np.array([float(a) for a in find_equilibrium(model, equilibrium).angles])
 
 
+def normal_modes(model: PendulumModel) -> tuple[np.ndarray, np.ndarray]:
+    """Small-oscillation angular frequencies [rad/s] and shapes about the all-down equilibrium.
+
+    Near the bottom ``theta'' = K theta`` with ``K = M^-1 dF/dq``; a normal mode
+    ``theta(t) = a cos(omega t) v`` needs ``K v = -omega^2 v``. So the
+    frequencies are ``sqrt(-mu)`` for the eigenvalues ``mu`` of ``K`` (the
+    imaginary parts of the Jacobian's eigenvalues ``+-i omega``) and the shapes
+    are its eigenvectors.
+
+    Returns
+    -------
+    frequencies : ndarray, shape (n,)
+        Ascending.
+    shapes : ndarray, shape (n, n)
+        ``shapes[k]`` is the shape of mode ``k``: the relative amplitudes of the
+        angles, scaled so that the first link's is 1 (links swinging the same
+        way have the same sign).
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> frequencies, shapes = normal_modes(pl.double_pendulum(g=9.81))
+    >>> np.round(shapes, 4)  # equal masses and lengths: (1, sqrt 2) and (1, -sqrt 2)
+    array([[ 1.    ,  1.4142],
+           [ 1.    , -1.4142]])
+    """
+    down = find_equilibrium(model)
+    ratio = np.array(down.stiffness_ratio.subs(model.parameter_values), dtype=float)
+    mus, vectors = np.linalg.eig(ratio)
+    mus, vectors = mus.real, vectors.real
+    if np.any(mus >= 0):
+        raise ValueError(f"the all-down equilibrium is not a center for g = {model.g}")
+    order = np.argsort(-mus)  # mu closest to 0 first: the slowest mode
+    shapes = vectors[:, order].T
+    return np.sqrt(-mus[order]), shapes / shapes[:, :1]
+
+
 def normal_mode_frequencies(model: PendulumModel) -> np.ndarray:
     """Small-oscillation angular frequencies [rad/s] about the all-down equilibrium.
 
-    They are ``sqrt(-mu)`` for the eigenvalues ``mu`` of ``M^-1 dF/dq`` there,
-    i.e. the imaginary parts of the Jacobian's eigenvalues ``+-i omega``.
+    The frequencies of :func:`normal_modes`.
 
     Returns
     -------
@@ -75,12 +112,7 @@ def normal_mode_frequencies(model: PendulumModel) -> np.ndarray:
     >>> np.round(normal_mode_frequencies(pl.simple_pendulum(length=1.0, g=4.0)), 12)
     array([2.])
     """
-    down = find_equilibrium(model)
-    ratio = np.array(down.stiffness_ratio.subs(model.parameter_values), dtype=float)
-    mus = np.linalg.eigvals(ratio).real
-    if np.any(mus >= 0):
-        raise ValueError(f"the all-down equilibrium is not a center for g = {model.g}")
-    return np.sort(np.sqrt(-mus))
+    return normal_modes(model)[0]
 
 
 def linearized_solution(model: PendulumModel, theta0, omega0=None, *, t, equilibrium=None,

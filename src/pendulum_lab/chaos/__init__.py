@@ -1,4 +1,4 @@
-"""Chaos in the double pendulum, and longer chains.
+"""Chaos in the double pendulum, longer chains and the damped, driven pendulum.
 
 The course report (Kanoun, Cowley, Ivachtchenko, MAT332, 2024) observes that
 small changes of the initial conditions of the double pendulum give radically
@@ -6,16 +6,24 @@ different motion. This package turns that into measurements, one topic per
 module:
 
 * :mod:`.separation`: phase-space distance of two nearby trajectories
-  (:func:`separation`);
+  (:func:`separation`), or of two computed runs (:func:`separation_between`);
 * :mod:`.lyapunov`: the largest Lyapunov exponent by two independent methods
-  (:func:`lyapunov_benettin`, :func:`lyapunov_variational`);
-* :mod:`.sections`: Poincare sections on energy levels, crossings located to
-  round-off (:func:`section_states`, :func:`poincare_section`,
-  :func:`energy_sections`);
+  (:func:`lyapunov_benettin`, :func:`lyapunov_variational`), all of them
+  (:func:`lyapunov_spectrum`, for damped and driven fields too), and per energy
+  surface (:func:`lyapunov_by_energy`);
+* :mod:`.sections`: Poincare sections on energy levels, crossings landed on
+  the surface by Newton's method in time or by Henon's trick
+  (:func:`section_states`, :func:`section_spread`, :func:`poincare_section`,
+  :func:`energy_sections`, :func:`landing_errors`);
 * :mod:`.flips`: Heyl's flip-time fractal (:func:`can_flip`,
   :func:`flip_time_map`);
 * :mod:`.small_angles`: where the linearised and the full motion part
-  (:func:`small_angle_comparison`).
+  (:func:`small_angle_comparison`);
+* :mod:`.stroboscopic`, :mod:`.bifurcation`, :mod:`.basins`: the damped,
+  driven pendulum sampled once per drive period
+  (:func:`stroboscopic_section`, :func:`orbit_periods`), against a
+  parameter (:func:`bifurcation_diagram`), and which attractor each start
+  ends on (:func:`basins_of_attraction`).
 
 Every trajectory comes from :func:`pendulum_lab.simulate` (an ensemble is a
 batch of initial states) or, for runs examined piece by piece, from
@@ -30,25 +38,67 @@ Phase-space distances are Euclidean in the canonical variables
 depend on that choice of norm; finite-time estimates do, a little.
 """
 
+from .basins import Basins, basins_of_attraction
+from .bifurcation import BifurcationDiagram, PeriodDoubling, PeriodWindow, bifurcation_diagram
 from .flips import FlipMap, can_flip, flip_time_map
-from .lyapunov import LyapunovEstimate, lyapunov_benettin, lyapunov_variational
-from .sections import PoincareSection, energy_sections, poincare_section, section_states
-from .separation import Separation, separation
+from .lyapunov import (
+    REGULAR_BELOW,
+    EnergyExponent,
+    EnergyLyapunov,
+    LyapunovEstimate,
+    LyapunovSpectrum,
+    lyapunov_benettin,
+    lyapunov_by_energy,
+    lyapunov_spectrum,
+    lyapunov_variational,
+)
+from .sections import (
+    LANDINGS,
+    LandingErrors,
+    PoincareSection,
+    energy_sections,
+    landing_errors,
+    poincare_section,
+    section_spread,
+    section_states,
+)
+from .separation import Separation, separation, separation_between
 from .small_angles import SmallAngleComparison, small_angle_comparison
+from .stroboscopic import StroboscopicSection, orbit_periods, stroboscopic_section
 
 __all__ = [
+    "Basins",
+    "BifurcationDiagram",
+    "EnergyExponent",
+    "EnergyLyapunov",
+    "LANDINGS",
+    "REGULAR_BELOW",
     "FlipMap",
+    "LandingErrors",
     "LyapunovEstimate",
+    "LyapunovSpectrum",
+    "PeriodDoubling",
+    "PeriodWindow",
     "PoincareSection",
     "Separation",
     "SmallAngleComparison",
+    "StroboscopicSection",
+    "basins_of_attraction",
+    "bifurcation_diagram",
     "can_flip",
     "energy_sections",
     "flip_time_map",
+    "landing_errors",
     "lyapunov_benettin",
+    "lyapunov_by_energy",
+    "lyapunov_spectrum",
     "lyapunov_variational",
+    "orbit_periods",
     "poincare_section",
+    "section_spread",
     "section_states",
     "separation",
+    "separation_between",
     "small_angle_comparison",
+    "stroboscopic_section",
 ]

@@ -181,9 +181,7 @@ def flip_time_map(
     >>> fm.time.shape, bool(fm.forbidden[2:4, 2:4].all())
     ((6, 6), True)
     """
-    check.pendulum_model(model)
-    if model.n != 2:
-        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    check.double_pendulum(model)
     n1, n2 = (size, size) if np.ndim(size) == 0 else tuple(size)
     n1 = check.integer_at_least("size", n1, 1)
     n2 = check.integer_at_least("size", n2, 1)

@@ -1,11 +1,18 @@
-"""The largest Lyapunov exponent, by two independent methods.
+"""Lyapunov exponents: the largest by two independent methods, and the whole spectrum.
 
 :func:`lyapunov_benettin` follows a companion trajectory and renormalises it
 [Benettin]_; :func:`lyapunov_variational` carries a tangent vector along the
-trajectory with the Jacobian of Hamilton's equations. Both run as one
+trajectory with the Jacobian of the vector field (forces included, so damped
+and driven fields too); :func:`lyapunov_spectrum` carries ``2n`` of them and
+re-orthonormalises them by QR factorisations. All run as one
 :func:`~pendulum_lab.simulate_segments` run, so with the same method, step,
 seed and interval they follow the same reference trajectory to the last bit
 and differ only in how the growth of a small perturbation is computed.
+
+The exponent of a chaotic orbit is a property of the chaotic component it
+explores, and that component lies on one energy surface:
+:func:`lyapunov_by_energy` estimates it for orbits spread over each of
+several energy surfaces, and tells the orbits of regular islands apart.
 
 References
 ----------
@@ -19,20 +26,38 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from .. import _validation as check
-from ..cluster import check_client, map_members, portable_method
+from ..cluster import check_client, map_members, members_of, portable_method
 from ..events import hermite
 from ..integrators import get_method
 from ..model import PendulumModel
 from ..segments import segment_length, simulate_segments
 from ..simulate import Trajectory, canonical_state, time_grid
 from ._common import phase_distance, require_finite, scalar_or_array, unit_direction
+from .sections import section_spread
 from .separation import perturbed
 
-__all__ = ["LyapunovEstimate", "benettin_running", "lyapunov_benettin", "lyapunov_variational"]
+__all__ = [
+    "REGULAR_BELOW",
+    "EnergyExponent",
+    "EnergyLyapunov",
+    "LyapunovEstimate",
+    "LyapunovSpectrum",
+    "benettin_running",
+    "lyapunov_benettin",
+    "lyapunov_by_energy",
+    "lyapunov_spectrum",
+    "lyapunov_variational",
+]
+
+#: An orbit whose estimate after 100 s lies below this [1/s] is counted as
+#: regular: on a regular orbit the estimate falls like ``ln(c t) / t``
+#: (``ln(100) / 100 = 0.046``), on a chaotic one it settles on a plateau.
+REGULAR_BELOW = 0.1
 
 
 @dataclass(frozen=True)
@@ -85,6 +110,8 @@ def _prepare(model, theta0, omega0, p0, t_end, dt, name: str, interval):
 
     Returns
     -------
+    model : PendulumModel
+        The model of each of the ``K`` flat members (a family flattened).
     theta0, p0 : ndarray, shape (K, n)
         The ``K`` initial states, flattened, in canonical variables.
     batch : tuple
@@ -103,8 +130,9 @@ def _prepare(model, theta0, omega0, p0, t_end, dt, name: str, interval):
             f"`t_end` ({t_end}) must cover at least one interval of `{name}` "
             f"({interval} steps of {dt})"
         )
-    n = model.n
-    return theta0.reshape(-1, n), p0.reshape(-1, n), theta0.shape[:-1], dt, interval, count
+    n, batch = model.n, theta0.shape[:-1]
+    return (model.for_ensemble(batch), theta0.reshape(-1, n), p0.reshape(-1, n), batch, dt,
+            interval, count)
 
 
 def lyapunov_benettin(
@@ -116,6 +144,7 @@ def lyapunov_benettin(
     dt: float = 0.01,
     method="glrk4",
     p0=None,
+    t0: float = 0.0,
     delta: float = 1e-8,
     renormalize_every: int = 50,
     seed=0,
@@ -142,7 +171,7 @@ def lyapunov_benettin(
     theta0, omega0, p0 : array_like, shape (..., n)
         One initial state or an ensemble of them, as for
         :func:`~pendulum_lab.simulate`.
-    t_end, dt, method, progress
+    t_end, dt, method, t0, progress
         As for :func:`~pendulum_lab.simulate`; the estimate uses whole
         renormalisation intervals, ``floor(n_steps / renormalize_every)`` of them.
     delta : float
@@ -181,7 +210,7 @@ def lyapunov_benettin(
     >>> bool(est.exponent > 0.5)
     True
     """
-    theta0, p0, batch, dt, every, intervals = _prepare(
+    model, theta0, p0, batch, dt, every, intervals = _prepare(
         model, theta0, omega0, p0, t_end, dt, "renormalize_every", renormalize_every
     )
     delta = check.positive_number("delta", delta)
@@ -189,30 +218,34 @@ def lyapunov_benettin(
     client = check_client(client)
     start = time.perf_counter()
     running = map_members(
-        benettin_running, (theta0, p0), client=client, chunk_size=chunk_size, label="Benettin",
-        progress=progress,
-        args=(model, dt, every, intervals, portable_method(method, client), delta, seed,
+        benettin_running, (theta0, p0, np.arange(len(theta0))), client=client,
+        chunk_size=chunk_size, label="Benettin", progress=progress,
+        args=(model, dt, every, intervals, portable_method(method, client), delta, seed, t0,
               progress if client is None else False))
     t = (np.arange(intervals) + 1) * every * dt
     return LyapunovEstimate(t, running.T.reshape(intervals, *batch), "benettin", method.name,
                             dt, time.perf_counter() - start)
 
 
-def benettin_running(theta0, p0, model: PendulumModel, dt: float, every: int, intervals: int,
-                     method, delta: float, seed, progress: bool | None = None
-                     ) -> np.ndarray:
+def benettin_running(theta0, p0, rows, model: PendulumModel, dt: float, every: int,
+                     intervals: int, method, delta: float, seed, t0: float = 0.0,
+                     progress: bool | None = None) -> np.ndarray:
     """Benettin's running estimates of a batch of states, shape ``(K, intervals)``.
 
     The work of :func:`lyapunov_benettin` (arguments validated there) on
-    states ``theta0, p0`` of shape ``(K, n)``, here or on a Dask worker
-    (:func:`pendulum_lab.cluster.map_members`).
+    states ``theta0, p0`` of shape ``(K, n)``, rows ``rows`` of the whole
+    flattened batch (a family's members are taken there), here or on a Dask
+    worker (:func:`pendulum_lab.cluster.map_members`).
     """
+    model = members_of(model, rows)
     members = len(theta0)
     q_cmp, p_cmp = perturbed(theta0, p0, delta, seed)
+    # Shape (2, K, n): the references, then their companions (a family's
+    # members broadcast over both).
     run = simulate_segments(
-        model, np.concatenate([theta0, q_cmp]), p0=np.concatenate([p0, p_cmp]),
+        model, np.stack([theta0, q_cmp]), p0=np.stack([p0, p_cmp]),
         t_end=intervals * every * dt, dt=dt, method=method, save_every=every,
-        segment_steps=every, progress=progress, label="Benettin",
+        segment_steps=every, t0=t0, progress=progress, label="Benettin",
     )
     companion = np.arange(2 * members) >= members
     log_sum = np.zeros(members)
@@ -247,22 +280,77 @@ def _ordered_product(mats: np.ndarray) -> np.ndarray:
 def _magnus_propagators(model, traj: Trajectory, dt: float) -> np.ndarray:
     """Fourth-order Magnus propagators of ``v' = A(t) v`` for each step of ``traj``.
 
-    Returns shape ``(L, ..., 2n, 2n)`` for ``L`` steps; see
-    :func:`lyapunov_variational`.
+    ``A`` is the Jacobian of the model's whole vector field (forces
+    included) at the two Gauss points of each step. Returns shape
+    ``(L, ..., 2n, 2n)`` for ``L`` steps; see :func:`lyapunov_variational`
+    and :func:`lyapunov_spectrum`.
     """
     n = traj.theta.shape[-1]
+    # A driven field depends on t (shaped to broadcast against the ensemble axes).
+    t = traj.t.reshape(-1, *(1,) * (traj.theta.ndim - 2))
+    at = (lambda tau: ()) if model.is_autonomous else (lambda tau: (tau,))
     z = np.concatenate([traj.theta, traj.p], axis=-1)
-    slope = dt * np.concatenate([traj.omega, -model.dH_dq(traj.theta, traj.p)], axis=-1)
+    slope = dt * np.concatenate(model.vector_field(traj.theta, traj.p, *at(t)), axis=-1)
     z0, z1, d0, d1 = z[:-1], z[1:], slope[:-1], slope[1:]
     jacobians = []
     for s in (0.5 - np.sqrt(3) / 6, 0.5 + np.sqrt(3) / 6):
         zs = hermite(s, z0, z1, d0, d1)
-        jacobians.append(model.jacobian(zs[..., :n], zs[..., n:]))
+        jacobians.append(model.jacobian(zs[..., :n], zs[..., n:], *at(t[:-1] + s * dt)))
     a1, a2 = jacobians
     w = (dt / 2) * (a1 + a2) + (np.sqrt(3) * dt**2 / 12) * (a2 @ a1 - a1 @ a2)
-    w2 = (w @ w) / 12
+    # exp(W) = exp(tr W / 2n) exp(W0) with W0 = W - (tr W / 2n) I: the scalar
+    # factor exactly, exp(W0) by its (2,2) Pade approximant.
+    shift = np.trace(w, axis1=-2, axis2=-1)[..., None, None] / (2 * n)
     eye = np.eye(2 * n)
-    return np.linalg.solve(eye - w / 2 + w2, eye + w / 2 + w2)
+    w0 = w - shift * eye
+    w2 = (w0 @ w0) / 12
+    return np.exp(shift) * np.linalg.solve(eye - w0 / 2 + w2, eye + w0 / 2 + w2)
+
+
+def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every, t0, progress,
+                    directions, label):
+    """Carry the tangent vectors ``directions`` (shape ``(2n, k)``) along one run.
+
+    Every ``save_every`` steps the propagated vectors are re-orthonormalised
+    by a QR factorisation, ``V = Q R``; ``log |R_ii|`` is the growth of the
+    ``i``-th direction not already spanned by the first ``i - 1``.
+
+    Returns
+    -------
+    t : ndarray, shape (J,)
+    running : ndarray, shape (J, ..., k)
+        The sums of logarithms divided by the elapsed time.
+    method : str
+    dt, seconds : float
+    """
+    start = time.perf_counter()
+    model, theta0, p0, batch, dt, every, blocks = _prepare(
+        model, theta0, omega0, p0, t_end, dt, "save_every", save_every
+    )
+    n, members = model.n, len(theta0)
+    total = blocks * every
+    # Memory of a segment: the Jacobians and propagators of each of its steps.
+    length = segment_length(total, 4 * members * (2 * n) ** 2, every)
+    run = simulate_segments(model, theta0, p0=p0, t_end=total * dt, dt=dt, method=method,
+                            segment_steps=length, t0=check.real_number("t0", t0),
+                            progress=progress, label=label)
+    basis = np.broadcast_to(directions, (members, *directions.shape)).copy()
+    log_sum = np.zeros((members, directions.shape[1]))
+    running = np.empty((blocks, *log_sum.shape))
+    recorded = 0
+    for segment in run:
+        require_finite(segment, f"lyapunov ({label})")
+        step_maps = _magnus_propagators(run.model, segment, dt)
+        steps = len(segment.t) - 1
+        props = _ordered_product(step_maps.reshape(steps // every, every, *step_maps.shape[1:]))
+        for prop in props:
+            basis, r = np.linalg.qr(prop @ basis)
+            log_sum += np.log(np.abs(np.diagonal(r, axis1=-2, axis2=-1)))
+            recorded += 1
+            running[recorded - 1] = log_sum / (recorded * every * dt)
+    t = (np.arange(blocks) + 1) * every * dt
+    return (t, running.reshape(blocks, *batch, directions.shape[1]), run.method.name, dt,
+            time.perf_counter() - start)
 
 
 def lyapunov_variational(
@@ -275,6 +363,7 @@ def lyapunov_variational(
     method="glrk4",
     save_every: int = 50,
     p0=None,
+    t0: float = 0.0,
     seed=0,
     progress: bool | None = None,
 ) -> LyapunovEstimate:
@@ -282,33 +371,42 @@ def lyapunov_variational(
 
     Along a trajectory ``z(t) = (theta, p)`` from :func:`~pendulum_lab.simulate`,
     a tangent vector obeys the linear equation ``v' = A(t) v`` with
-    ``A = model.jacobian(theta, p)``, the Jacobian of Hamilton's equations
-    built from the symbolic second derivatives. The tangent is carried over
-    each step ``[t_k, t_k + dt]`` by the fourth-order Magnus method:
+    ``A = model.jacobian(theta, p, t)``, the Jacobian of the whole vector
+    field (damping and drive included) built from the symbolic second
+    derivatives. The tangent is carried over each step ``[t_k, t_k + dt]`` by
+    the fourth-order Magnus method:
 
     ``W = dt/2 (A_1 + A_2) + sqrt(3) dt^2 / 12 [A_2, A_1]``,
-    ``v_{k+1} = (I - W/2 + W^2/12)^{-1} (I + W/2 + W^2/12) v_k``,
+    ``v_{k+1} = exp(W) v_k``,
 
     where ``A_1``, ``A_2`` are the Jacobians at the two Gauss points
     ``t_k + (1/2 -+ sqrt(3)/6) dt`` (the state there from cubic Hermite
     interpolation between the saved steps, :func:`pendulum_lab.events.hermite`,
-    accurate to ``O(dt^4)``), and the last line is the (2,2) Pade approximant
-    of ``exp(W)``. ``W`` is a Hamiltonian matrix and a diagonal Pade
-    approximant maps Hamiltonian matrices to symplectic ones, so the tangent
-    propagator is exactly symplectic, like the flow it linearises; the whole
-    scheme is fourth order in ``dt``. The propagators of ``save_every`` steps
-    are multiplied together, the tangent vector is advanced, its growth added
-    to a sum of logarithms and the vector normalised.
+    accurate to ``O(dt^4)``). The exponential is split as
+    ``exp(tr W / 2n) exp(W0)``, ``W0 = W - (tr W / 2n) I``: the scalar factor
+    is exact, and ``exp(W0)`` is replaced by its (2,2) Pade approximant
+    ``(I - W0/2 + W0^2/12)^{-1} (I + W0/2 + W0^2/12)``. For a Hamiltonian
+    field ``W = W0`` is a Hamiltonian matrix, and a diagonal Pade approximant
+    maps it to a symplectic one: the tangent propagator is exactly
+    symplectic, like the flow it linearises. For the damped simple pendulum
+    (``tr A = -gamma``) ``W0`` is a traceless 2 x 2 matrix, whose Pade
+    approximant has determinant 1: the propagator contracts areas by exactly
+    ``exp(-gamma dt)``, as the flow does. The whole scheme is fourth order in
+    ``dt``. The propagators of ``save_every`` steps are multiplied together,
+    the tangent vector is advanced, its growth added to a sum of logarithms
+    and the vector normalised.
 
     The state comes from the chosen integrator, the tangent only from the
     Jacobian, so this estimate is independent of :func:`lyapunov_benettin`
     (which uses no Jacobian); both follow the same reference trajectory.
+    :func:`lyapunov_spectrum` carries ``2n`` tangent vectors the same way.
 
     Parameters
     ----------
     model : PendulumModel
+        Or a :class:`~pendulum_lab.family.ModelFamily` (one estimate per member).
     theta0, omega0, p0 : array_like, shape (..., n)
-    t_end, dt, method, progress
+    t_end, dt, method, t0, progress
         As for :func:`~pendulum_lab.simulate`; the estimate uses
         ``floor(n_steps / save_every)`` whole blocks of steps.
     save_every : int
@@ -326,6 +424,11 @@ def lyapunov_variational(
     FloatingPointError
         If the integration blows up.
 
+    References
+    ----------
+    S. Blanes, F. Casas, J. A. Oteo, J. Ros, "The Magnus expansion and some of
+    its applications", Phys. Rep. 470 (2009) 151-238 (the fourth-order method).
+
     Examples
     --------
     >>> import pendulum_lab as pl
@@ -334,32 +437,265 @@ def lyapunov_variational(
     >>> bool(est.exponent > 0.5)
     True
     """
-    theta0, p0, batch, dt, every, blocks = _prepare(
-        model, theta0, omega0, p0, t_end, dt, "save_every", save_every
+    check.pendulum_model(model)
+    t, running, name, dt, seconds = _tangent_growth(
+        model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
+        t0=t0, progress=progress, directions=unit_direction(2 * model.n, seed)[:, None],
+        label="variational",
     )
-    n, members = model.n, len(theta0)
-    total = blocks * every
-    # Memory of a segment: the Jacobians and propagators of each of its steps.
-    length = segment_length(total, 4 * members * (2 * n) ** 2, every)
-    run = simulate_segments(model, theta0, p0=p0, t_end=total * dt, dt=dt, method=method,
-                            segment_steps=length, progress=progress, label="variational")
-    v = np.broadcast_to(unit_direction(2 * n, seed), (members, 2 * n)).copy()
-    log_sum = np.zeros(members)
-    running = np.empty((blocks, members))
-    recorded = 0
-    start = time.perf_counter()
-    for segment in run:
-        require_finite(segment, "lyapunov_variational")
-        step_maps = _magnus_propagators(model, segment, dt)
-        steps = len(segment.t) - 1
-        props = _ordered_product(step_maps.reshape(steps // every, every, *step_maps.shape[1:]))
-        for prop in props:
-            v = np.einsum("...ij,...j->...i", prop, v)
-            norm = np.linalg.norm(v, axis=-1)
-            log_sum += np.log(norm)
-            v /= norm[..., None]
-            recorded += 1
-            running[recorded - 1] = log_sum / (recorded * every * dt)
-    t = (np.arange(blocks) + 1) * every * dt
-    return LyapunovEstimate(t, running.reshape(blocks, *batch), "variational", run.method.name,
-                            dt, time.perf_counter() - start)
+    return LyapunovEstimate(t, running[..., 0], "variational", name, dt, seconds)
+
+
+@dataclass(frozen=True)
+class LyapunovSpectrum:
+    """Running estimates of all ``2n`` Lyapunov exponents.
+
+    Attributes
+    ----------
+    t : ndarray, shape (J,)
+        Times of the estimates, from the start of the run [s].
+    running : ndarray, shape (J, ..., 2n)
+        Running estimates [1/s]; ``...`` is the ensemble shape. Exponent
+        ``i`` is the growth rate of the ``i``-th direction orthogonal to the
+        first ``i - 1`` (QR order): after a transient, largest first.
+    method : str
+        The integrator that produced the trajectory.
+    dt : float
+    wall_time : float
+    """
+
+    t: np.ndarray
+    running: np.ndarray
+    method: str
+    dt: float
+    wall_time: float
+
+    @property
+    def exponents(self) -> np.ndarray:
+        """The estimates at the final time, shape ``(..., 2n)`` [1/s]."""
+        return self.running[-1]
+
+    @property
+    def largest(self):
+        """The first exponent at the final time (float, or array for an ensemble)."""
+        return scalar_or_array(self.running[-1, ..., 0])
+
+    @property
+    def sum(self):
+        """Sum of the exponents at the final time: the mean phase-space contraction rate."""
+        return scalar_or_array(self.running[-1].sum(axis=-1))
+
+    def plot(self, ax=None, **kwargs):
+        """Running estimates of every exponent against time; returns the Figure."""
+        from ..plotting import plot_lyapunov_spectrum
+
+        return plot_lyapunov_spectrum(self, ax=ax, **kwargs)
+
+
+def lyapunov_spectrum(
+    model: PendulumModel,
+    theta0,
+    omega0=None,
+    *,
+    t_end: float,
+    dt: float = 0.01,
+    method="glrk4",
+    save_every: int = 50,
+    p0=None,
+    t0: float = 0.0,
+    progress: bool | None = None,
+) -> LyapunovSpectrum:
+    """All ``2n`` Lyapunov exponents, by QR re-orthonormalisation of the tangent vectors.
+
+    ``2n`` tangent vectors, starting as the coordinate axes of
+    ``(theta, p)``, are carried along the trajectory exactly as in
+    :func:`lyapunov_variational` (fourth-order Magnus propagators of the
+    Jacobian of the whole field, forces included). Every ``save_every``
+    steps they are re-orthonormalised, ``V = Q R`` (Gram-Schmidt in matrix
+    form); ``Q`` goes on, and ``log |R_ii|`` is added to the sum of
+    exponent ``i`` [Benettin]_.
+
+    The sum of all exponents is the mean rate at which the flow changes
+    phase-space volume, the time average of ``tr A`` (Liouville's formula).
+    For a Hamiltonian field it is 0 and the exponents come in pairs
+    ``+-lambda``; for the damped simple pendulum ``tr A = -damping / (m l^2)``
+    at every state, in ``(theta, p)`` as in ``(theta, omega)`` (the change of
+    variables ``p = m l^2 omega`` is constant), and the propagators contract
+    areas by exactly ``exp(-damping dt / (m l^2))`` per step, so the computed
+    sum equals ``-damping / (m l^2)`` to round-off: an exact check.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        Or a :class:`~pendulum_lab.family.ModelFamily` (one spectrum per member).
+    theta0, omega0, p0 : array_like, shape (..., n)
+    t_end, dt, method, t0, progress
+        As for :func:`~pendulum_lab.simulate`; the estimate uses
+        ``floor(n_steps / save_every)`` whole blocks of steps.
+    save_every : int
+        Steps between re-orthonormalisations (and recorded estimates), ``>= 1``.
+
+    Returns
+    -------
+    LyapunovSpectrum
+
+    Raises
+    ------
+    FloatingPointError
+        If the integration blows up.
+
+    References
+    ----------
+    Benettin, Galgani, Giorgilli, Strelcyn, Meccanica 15 (1980) 21-30 (all
+    the exponents); K. Geist, U. Parlitz, W. Lauterborn, "Comparison of
+    different methods for computing Lyapunov exponents", Prog. Theor. Phys.
+    83 (1990) 875-893.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> spectrum = lyapunov_spectrum(pl.driven_pendulum(), [0.2], [0.0], t_end=30.0, dt=0.1,
+    ...                              method="rk4")
+    >>> round(spectrum.sum, 12)  # -damping / (m l^2)
+    -0.5
+    """
+    check.pendulum_model(model)
+    t, running, name, dt, seconds = _tangent_growth(
+        model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
+        t0=t0, progress=progress, directions=np.eye(2 * model.n), label="spectrum",
+    )
+    return LyapunovSpectrum(t, running, name, dt, seconds)
+
+class EnergyExponent(NamedTuple):
+    """The exponent on one energy surface: mean and standard error over its chaotic orbits."""
+
+    energy: float
+    mean: float
+    standard_error: float
+    chaotic: int
+    orbits: int
+
+
+@dataclass(frozen=True)
+class EnergyLyapunov:
+    """Lyapunov exponents of orbits spread over energy surfaces; see :func:`lyapunov_by_energy`.
+
+    Attributes
+    ----------
+    energies : ndarray, shape (E,)
+        The energy surfaces [J].
+    energy : ndarray, shape (K,)
+        The energy of each orbit [J].
+    theta0, omega0 : ndarray, shape (K, n)
+        The initial states.
+    exponent : ndarray, shape (K,)
+        Benettin's estimate after ``t_end`` [1/s].
+    threshold : float
+        Orbits with ``exponent < threshold`` count as regular.
+    t_end, dt : float
+    method : str
+    wall_time : float
+    """
+
+    energies: np.ndarray
+    energy: np.ndarray
+    theta0: np.ndarray
+    omega0: np.ndarray
+    exponent: np.ndarray
+    threshold: float
+    t_end: float
+    dt: float
+    method: str
+    wall_time: float
+
+    @property
+    def regular(self) -> np.ndarray:
+        """Boolean mask, shape (K,): orbits whose estimate lies below ``threshold``."""
+        return self.exponent < self.threshold
+
+    def per_energy(self) -> list[EnergyExponent]:
+        """One :class:`EnergyExponent` per energy (mean NaN where no orbit is chaotic)."""
+        rows = []
+        for energy in self.energies:
+            here = self.energy == energy
+            chaotic = self.exponent[here & ~self.regular]
+            mean = float(chaotic.mean()) if chaotic.size else np.nan
+            error = float(chaotic.std(ddof=1) / np.sqrt(chaotic.size)) if chaotic.size > 1 \
+                else np.nan
+            rows.append(EnergyExponent(float(energy), mean, error, int(chaotic.size),
+                                       int(here.sum())))
+        return rows
+
+    def plot(self, ax=None):
+        """Exponent against energy: every orbit, and the mean over the chaotic ones."""
+        from ..plotting import plot_lyapunov_energy
+
+        return plot_lyapunov_energy(self, ax=ax)
+
+
+def lyapunov_by_energy(
+    model: PendulumModel,
+    energies,
+    *,
+    orbits: int = 12,
+    t_end: float = 100.0,
+    dt: float = 0.01,
+    method="glrk4",
+    threshold: float = REGULAR_BELOW,
+    seed=0,
+    progress: bool | None = None,
+) -> EnergyLyapunov:
+    """Benettin's exponent for orbits spread over each of several energy surfaces.
+
+    The exponent belongs to a chaotic component, and a component lies on one
+    energy surface: averaging over releases of different energies mixes
+    different components, and releases in regular islands add near-zero
+    values. Here the starts of each energy are those of its Poincare section
+    (:func:`~pendulum_lab.chaos.section_spread`), all orbits run as one
+    ensemble (:func:`lyapunov_benettin`), and the orbits whose estimate after
+    ``t_end`` stays below ``threshold`` are counted as regular and left out of
+    the mean (:meth:`EnergyLyapunov.per_energy`).
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A double pendulum.
+    energies : sequence of float
+        Energies [J], above the minimum of the potential energy.
+    orbits : int
+        Orbits per energy, ``>= 2``.
+    t_end, dt, method, seed, progress
+        As for :func:`lyapunov_benettin`.
+    threshold : float
+        Estimates below it [1/s] count as regular orbits, ``> 0``; the default
+        :data:`REGULAR_BELOW` suits ``t_end`` near 100 s.
+
+    Returns
+    -------
+    EnergyLyapunov
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> scan = lyapunov_by_energy(pl.double_pendulum(), [-20.0, 16.0], orbits=2, t_end=20.0,
+    ...                           method="rk4", threshold=0.3)
+    >>> [(row.energy, row.chaotic) for row in scan.per_energy()]
+    [(-20.0, 0), (16.0, 2)]
+    """
+    check.double_pendulum(model)
+    energies = np.array([check.real_number("energies", e) for e in np.atleast_1d(energies)])
+    lowest = float(model.potential_energy(np.zeros(2)))
+    if energies.size == 0 or np.any(energies <= lowest):
+        raise ValueError(f"`energies` must lie above the minimum of the potential energy "
+                         f"({lowest:.6g} J), got {energies.tolist()}")
+    orbits = check.integer_at_least("orbits", orbits, 2)
+    threshold = check.positive_number("threshold", threshold)
+    starts = [section_spread(model, energy, orbits) for energy in energies]
+    theta0 = np.concatenate([theta for theta, _ in starts])
+    omega0 = np.concatenate([omega for _, omega in starts])
+    energy = np.repeat(energies, [len(theta) for theta, _ in starts])
+    estimate = lyapunov_benettin(model, theta0, omega0, t_end=t_end, dt=dt, method=method,
+                                 seed=seed, progress=progress)
+    return EnergyLyapunov(energies, energy, theta0, omega0, np.asarray(estimate.exponent),
+                          threshold, float(estimate.t[-1]), estimate.dt, estimate.method,
+                          estimate.wall_time)

@@ -1,5 +1,12 @@
 """Poincare sections: crossings of a surface located to round-off.
 
+A crossing is detected between two saved steps and then landed on the
+surface in one of two ways (``landing`` of :func:`poincare_section`): Newton's
+method on the length of one extra step in time (:func:`pendulum_lab.events.land`),
+or Henon's trick, one step with the angle as the independent variable
+(:func:`pendulum_lab.henon_step`). :func:`landing_errors` measures how far
+either lands from the exact crossing.
+
 References
 ----------
 .. [Henon] M. Henon, "On the numerical computation of Poincare maps",
@@ -8,6 +15,7 @@ References
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,12 +23,25 @@ import numpy as np
 from .. import _validation as check
 from .._angles import wrap_angle
 from ..events import check_direction, find_crossings, land
+from ..integrators import get_method
 from ..model import PendulumModel
 from ..segments import simulate_segments
-from ..simulate import step
-from ._common import require_finite
+from ..simulate import canonical_state, henon_step, step
+from ._common import phase_distance, require_finite
 
-__all__ = ["PoincareSection", "energy_sections", "poincare_section", "section_states"]
+__all__ = [
+    "LANDINGS",
+    "LandingErrors",
+    "PoincareSection",
+    "energy_sections",
+    "landing_errors",
+    "poincare_section",
+    "section_spread",
+    "section_states",
+]
+
+#: How a detected crossing is put on the surface (``landing`` of :func:`poincare_section`).
+LANDINGS = ("newton", "henon", "nearest")
 
 
 def section_states(
@@ -127,9 +148,11 @@ class PoincareSection:
     link, value, direction
         The surface and the crossing direction (``1``: ``theta_link``
         increasing, ``-1``: decreasing, ``0``: both).
-    refined : bool
-        True if crossings were located on the surface, False if they are the
-        nearest saved steps.
+    landing : {"newton", "henon", "nearest"}
+        How the crossings were put on the surface (see :func:`poincare_section`).
+    landing_steps : ndarray of int, shape (C,)
+        Integrator steps spent landing each crossing (0 for ``"nearest"``, 1
+        for ``"henon"``, Newton's iterations for ``"newton"``).
     """
 
     t: np.ndarray
@@ -140,7 +163,16 @@ class PoincareSection:
     link: int
     value: float
     direction: int
-    refined: bool
+    landing: str
+    landing_steps: np.ndarray
+
+    def subset(self, keep, orbit_offset: int = 0) -> PoincareSection:
+        """The crossings where ``keep`` is true, orbits renumbered by ``- orbit_offset``."""
+        return dataclasses.replace(
+            self, t=self.t[keep], theta=self.theta[keep], p=self.p[keep],
+            orbit=self.orbit[keep] - orbit_offset, residual=self.residual[keep],
+            landing_steps=self.landing_steps[keep],
+        )
 
     def shown_link(self, link: int | None = None) -> int:
         """``link``, or by default the first link off the surface."""
@@ -171,7 +203,7 @@ def poincare_section(
     link: int = 0,
     value: float = 0.0,
     direction: int = 1,
-    refine: bool = True,
+    landing: str = "newton",
     progress: bool | None = None,
 ) -> PoincareSection:
     """Crossings of ``theta_link = value (mod 2 pi)`` located to round-off.
@@ -179,22 +211,28 @@ def poincare_section(
     The ensemble runs in segments (:func:`~pendulum_lab.simulate_segments`)
     with every step kept; a crossing is a step over which the unwrapped angle
     passes ``value + 2 pi m``, upwards for ``direction = 1``
-    (:func:`pendulum_lab.events.find_crossings` with period ``2 pi``). For
-    each crossing between steps ``k`` and ``k+1``:
+    (:func:`pendulum_lab.events.find_crossings` with period ``2 pi``). Each
+    crossing, between saved steps ``k`` and ``k+1``, is then put on the
+    surface by one of two landings, both with the same integrator and both
+    starting from step ``k``:
 
-    1. the cubic Hermite interpolant of ``theta_link`` (values and slopes
-       ``dH/dp_link`` at both steps) gives a first guess ``tau`` of the
-       crossing time after ``t_k``;
-    2. Newton's method on ``tau``, each iterate being one step of length
-       ``tau`` of the same integrator from step ``k`` (:func:`~pendulum_lab.step`),
-       drives ``theta_link`` onto the surface to round-off
-       (:func:`pendulum_lab.events.land`).
+    ``"newton"``
+        The cubic Hermite interpolant of ``theta_link`` (values and slopes
+        ``dH/dp_link`` at both steps) gives a first guess ``tau`` of the
+        crossing time after ``t_k``; Newton's method on ``tau``, each iterate
+        one step of length ``tau`` (:func:`~pendulum_lab.step`), drives
+        ``theta_link`` onto the surface (:func:`pendulum_lab.events.land`).
+        A root solve in time: a few steps per crossing.
+    ``"henon"``
+        Henon's trick (1982): one step of the integrator with ``theta_link``
+        as the independent variable, from ``theta_link(t_k)`` to the surface
+        (:func:`~pendulum_lab.henon_step`). One step per crossing, no
+        iteration; methods in canonical variables only.
 
-    The result is Henon's idea (land exactly on the surface with one extra
-    step of the integrator) done by a root solve in time instead of a change
-    of independent variable, so no new vector field is needed. With
-    ``refine=False`` the nearest saved step is returned instead (off the
-    surface by up to ``dt |theta_link'| / 2``: a negative control).
+    Both land on the surface to round-off, with an error of the integrator's
+    local order (:func:`landing_errors`). ``landing="nearest"`` returns the
+    nearest saved step instead (off the surface by up to
+    ``dt |theta_link'| / 2``: a negative control).
 
     Parameters
     ----------
@@ -210,8 +248,8 @@ def poincare_section(
     direction : {1, -1, 0}
         ``1``: crossings with ``theta_link`` increasing (``dH/dp_link > 0``),
         ``-1``: decreasing, ``0``: both.
-    refine : bool
-        Locate each crossing on the surface (default) or return the nearest step.
+    landing : {"newton", "henon", "nearest"}
+        How each crossing is put on the surface (see above).
     progress : bool, optional
 
     Returns
@@ -230,7 +268,8 @@ def poincare_section(
 
     References
     ----------
-    M. Henon, Physica D 5 (1982) 412-414.
+    M. Henon, "On the numerical computation of Poincare maps", Physica D 5
+    (1982) 412-414.
 
     Examples
     --------
@@ -238,20 +277,27 @@ def poincare_section(
     >>> dp = pl.double_pendulum()
     >>> theta0, omega0 = section_states(dp, -20.0, [[0.3]], [[0.0]])
     >>> sec = poincare_section(dp, theta0, omega0, t_end=5.0, method="rk4")
-    >>> bool(np.all(sec.residual < 1e-10)), len(sec.t) > 0
+    >>> henon = poincare_section(dp, theta0, omega0, t_end=5.0, method="rk4", landing="henon")
+    >>> bool(np.all(sec.residual < 1e-10)), bool(np.all(henon.residual < 1e-10))
     (True, True)
+    >>> bool(np.max(np.abs(sec.p - henon.p)) < 1e-8), set(henon.landing_steps.tolist())
+    (True, {1})
     """
     check.pendulum_model(model)
     n = model.n
     link = check.index_below("link", link, n)
     value = check.real_number("value", value)
     direction = check_direction(direction)
+    landing = check.choice("landing", landing, LANDINGS)
+    if landing == "henon" and get_method(method).variables != "canonical":
+        raise ValueError(f"landing='henon' needs a method in canonical variables, got "
+                         f"`method` {get_method(method).name!r}; use landing='newton'")
     run = simulate_segments(model, theta0, omega0, t_end=t_end, dt=dt, method=method, p0=p0,
                             progress=progress, label="Poincare section")
-    found = {name: [] for name in ("t", "theta", "p", "orbit", "residual")}
+    found = {name: [] for name in ("t", "theta", "p", "orbit", "residual", "landing_steps")}
     for segment in run:
         require_finite(segment, "poincare_section")
-        _crossings(model, segment, link, value, direction, refine, found)
+        _crossings(model, segment, link, value, direction, landing, found)
     arrays = {k: np.asarray(v) for k, v in found.items()}
     if arrays["t"].size == 0:
         arrays = {
@@ -260,6 +306,7 @@ def poincare_section(
             "p": np.empty((0, n)),
             "orbit": np.empty(0, dtype=int),
             "residual": np.empty(0),
+            "landing_steps": np.empty(0, dtype=int),
         }
     order = np.lexsort((arrays["t"], arrays["orbit"]))
     return PoincareSection(
@@ -271,23 +318,36 @@ def poincare_section(
         link=link,
         value=value,
         direction=direction,
-        refined=bool(refine),
+        landing=landing,
+        landing_steps=arrays["landing_steps"][order].astype(int),
     )
 
 
-def _crossings(model, segment, link, value, direction, refine, found):
+def _crossings(model, segment, link, value, direction, landing, found):
     """Append the crossings in one segment (``theta`` of shape ``(L+1, K, n)``) to ``found``."""
     hits = find_crossings(segment.theta[..., link], direction, level=value, period=2 * np.pi)
     if len(hits) == 0:
         return
     steps, orbits = hits.step, hits.member
-    if not refine:
+    if landing == "nearest":
         k, residual = hits.nearest()
         found["t"].extend(segment.t[k])
         found["theta"].extend(segment.theta[k, orbits])
         found["p"].extend(segment.p[k, orbits])
         found["orbit"].extend(orbits)
         found["residual"].extend(residual)
+        found["landing_steps"].extend(np.zeros(len(hits), dtype=int))
+        return
+    if landing == "henon":
+        theta, p, elapsed = henon_step(model, segment.theta[steps, orbits],
+                                       p0=segment.p[steps, orbits], link=link,
+                                       level=hits.level, method=segment.method)
+        found["t"].extend(segment.t[steps] + elapsed)
+        found["theta"].extend(theta)
+        found["p"].extend(p)
+        found["orbit"].extend(orbits)
+        found["residual"].extend(np.abs(theta[:, link] - hits.level))
+        found["landing_steps"].extend(np.ones(len(hits), dtype=int))
         return
     dt = segment.dt
     guess = hits.fraction(dt * segment.omega[steps, orbits, link],
@@ -301,7 +361,7 @@ def _crossings(model, segment, link, value, direction, refine, found):
                 return theta, p
             return step(model, theta, p0=p, dt=tau, method=segment.method, t0=t_k)
 
-        miss, (q, p_landed), tau = land(
+        miss, (q, p_landed), tau, used = land(
             advance,
             lambda state, target=target: state[0][link] - target,
             lambda state: model.dH_dp(*state)[link],
@@ -314,6 +374,127 @@ def _crossings(model, segment, link, value, direction, refine, found):
         found["p"].append(p_landed)
         found["orbit"].append(j)
         found["residual"].append(miss)
+        found["landing_steps"].append(used)
+
+
+@dataclass(frozen=True)
+class LandingErrors:
+    """How far landed crossings lie from the exact ones (see :func:`landing_errors`).
+
+    Attributes
+    ----------
+    state_error : ndarray, shape (K,)
+        Euclidean distance in ``(theta, p)`` between each landed crossing and
+        the exact one.
+    time_error : ndarray, shape (K,)
+        ``|t_landed - t_exact|`` [s].
+    landing_steps : ndarray of int, shape (K,)
+        Integrator steps each landing took.
+    speed : ndarray, shape (K,)
+        ``|theta_link'|`` at each exact crossing [rad/s]: how briskly the
+        surface is crossed.
+    landing, method : str
+    dt : float
+    """
+
+    state_error: np.ndarray
+    time_error: np.ndarray
+    landing_steps: np.ndarray
+    speed: np.ndarray
+    landing: str
+    method: str
+    dt: float
+
+    def plot(self, ax=None, **kwargs):
+        """The error against the crossing speed (log-log); returns the Figure."""
+        from ..plotting import plot_landing_errors
+
+        return plot_landing_errors(self, ax=ax, **kwargs)
+
+
+def landing_errors(
+    model: PendulumModel,
+    theta,
+    omega=None,
+    *,
+    dt: float,
+    method="rk4",
+    landing: str = "newton",
+    p0=None,
+    link: int = 0,
+    lead: float = 0.5,
+) -> LandingErrors:
+    """Land on known crossings and measure the error of the landing alone.
+
+    ``theta`` and ``omega`` (or ``p0``) are states exactly on the surface
+    ``theta_link = 0`` (from :func:`section_states`, for example). Each is
+    moved back in time by ``lead * dt`` with many small steps of the
+    eighth-order ``glrk8`` (an error near round-off); from there
+    :func:`poincare_section` runs one step of ``dt`` with ``method`` and
+    lands the crossing with ``landing``. The distance between the landed and
+    the original state is the error of one step plus its landing, with no
+    error accumulated before: it shrinks like ``dt ** (order + 1)``. Henon's
+    step integrates a field divided by ``theta_link'``; where the surface is
+    crossed slowly (``speed`` small) that field varies fast and the error of
+    ``"henon"`` grows, while Newton's steps in time do not notice.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta, omega, p0 : array_like, shape (K, n)
+        States on the surface, crossing it (give ``omega`` or ``p0``).
+    dt : float
+        Step of ``method`` [s], ``> 0``.
+    method : str or Method
+    landing : {"newton", "henon"}
+    link : int
+        The surface is ``theta_link = 0``.
+    lead : float
+        Where in its step the crossing lies, in ``(0, 1)``.
+
+    Returns
+    -------
+    LandingErrors
+
+    Examples
+    --------
+    >>> import numpy as np, pendulum_lab as pl
+    >>> dp = pl.double_pendulum()
+    >>> theta, omega = pl.chaos.section_states(dp, -10.0, [[0.4], [1.0]], [[0.0], [0.5]])
+    >>> coarse = landing_errors(dp, theta, omega, dt=0.02, method="rk4", landing="henon")
+    >>> fine = landing_errors(dp, theta, omega, dt=0.01, method="rk4", landing="henon")
+    >>> bool(16 < coarse.state_error.max() / fine.state_error.max() < 64)  # about 2**5
+    True
+    """
+    check.pendulum_model(model)
+    landing = check.choice("landing", landing, ("newton", "henon"))
+    dt = check.positive_number("dt", dt)
+    lead = check.number_in("lead", lead, 0.0, 1.0, open_low=True)
+    if lead == 1.0:
+        raise ValueError("`lead` must be below 1 (the crossing must lie inside the step)")
+    link = check.index_below("link", link, model.n)
+    theta, p = canonical_state(model, theta, omega, p0)
+    theta, p = theta.reshape(-1, model.n), p.reshape(-1, model.n)
+    if np.any(theta[:, link] != 0.0):
+        raise ValueError(f"`theta` must lie on the surface: theta[:, {link}] must be 0")
+    back_theta, back_p = theta, p
+    for _ in range(16):
+        back_theta, back_p = step(model, back_theta, p0=back_p, dt=-lead * dt / 16,
+                                  method="glrk8")
+    sec = poincare_section(model, back_theta, p0=back_p, t_end=dt, dt=dt, method=method,
+                           link=link, direction=0, landing=landing, progress=False)
+    if not np.array_equal(sec.orbit, np.arange(len(theta))):
+        raise ValueError("each state must cross the surface exactly once within the step "
+                         f"(found crossings of orbits {sec.orbit.tolist()}); use a smaller `dt`")
+    return LandingErrors(
+        state_error=phase_distance(sec.theta, sec.p, theta, p, wrap=True),
+        time_error=np.abs(sec.t - lead * dt),
+        landing_steps=sec.landing_steps,
+        speed=np.abs(model.dH_dp(theta, p)[:, link]),
+        landing=landing,
+        method=get_method(method).name,
+        dt=dt,
+    )
 
 
 def energy_sections(
@@ -324,15 +505,13 @@ def energy_sections(
     t_end: float = 100.0,
     dt: float = 0.01,
     method="glrk4",
+    landing: str = "newton",
     progress: bool | None = None,
 ) -> dict[float, PoincareSection]:
     """Poincare sections ``theta_1 = 0``, ``theta_1' > 0`` of a double pendulum, several energies.
 
     For each energy, ``orbits`` initial states are spread over the section:
-    half along ``p_2 = 0`` at ``theta_2`` between 0 and the largest accessible
-    angle, half along ``theta_2 = 0`` at ``p_2 > 0`` up to the largest
-    accessible momentum (all via :func:`section_states`). All orbits of all
-    energies run as one ensemble.
+    by :func:`section_spread`. All orbits of all energies run as one ensemble.
 
     Parameters
     ----------
@@ -342,7 +521,7 @@ def energy_sections(
         Energies [J], above the minimum ``V(0, 0)``.
     orbits : int
         Initial states per energy, ``>= 2``.
-    t_end, dt, method, progress
+    t_end, dt, method, landing, progress
         As for :func:`poincare_section`.
 
     Returns
@@ -351,48 +530,72 @@ def energy_sections(
         ``{energy: PoincareSection}``; each section's ``orbit`` numbers its
         own orbits from 0.
     """
-    check.pendulum_model(model)
-    if model.n != 2:
-        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    check.double_pendulum(model)
     orbits = check.integer_at_least("orbits", orbits, 2)
     energies = [check.real_number("energies", e) for e in np.atleast_1d(energies)]
     starts, owner = [], []
     for number, energy in enumerate(energies):
-        theta0, omega0 = _spread_on_section(model, energy, orbits)
+        theta0, omega0 = _spread(model, energy, orbits, "energies")
         starts.append((theta0, omega0))
         owner += [number] * len(theta0)
     theta0 = np.concatenate([s[0] for s in starts])
     omega0 = np.concatenate([s[1] for s in starts])
     sec = poincare_section(model, theta0, omega0, t_end=t_end, dt=dt, method=method,
-                           progress=progress)
+                           landing=landing, progress=progress)
     owner = np.asarray(owner)
     first = np.cumsum([0] + [len(s[0]) for s in starts])
     result = {}
     for number, energy in enumerate(energies):
-        keep = owner[sec.orbit] == number
-        result[energy] = PoincareSection(
-            t=sec.t[keep],
-            theta=sec.theta[keep],
-            p=sec.p[keep],
-            orbit=sec.orbit[keep] - first[number],
-            residual=sec.residual[keep],
-            link=sec.link,
-            value=sec.value,
-            direction=sec.direction,
-            refined=sec.refined,
-        )
+        result[energy] = sec.subset(owner[sec.orbit] == number, orbit_offset=first[number])
     return result
 
 
-def _spread_on_section(model, energy, orbits):
-    """``orbits`` states on ``theta_1 = 0`` at ``energy``, spread along two lines."""
+def section_spread(model: PendulumModel, energy: float, orbits: int = 10
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """``orbits`` states on the section ``theta_1 = 0``, ``theta_1' > 0`` at one energy.
+
+    Half of them lie along ``p_2 = 0`` at ``theta_2`` evenly spread between 0
+    and the largest angle the energy reaches, half along ``theta_2 = 0`` at
+    ``p_2 > 0`` up to the largest momentum it allows; ``p_1`` follows from
+    ``H = energy`` (:func:`section_states`). These are the starts of
+    :func:`energy_sections`: all on one energy surface, reaching across it.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A double pendulum.
+    energy : float
+        Total energy [J], above the minimum ``V(0, 0)``.
+    orbits : int
+        Number of states, ``>= 2``.
+
+    Returns
+    -------
+    theta0, omega0 : ndarray, shape (orbits, 2)
+
+    Examples
+    --------
+    >>> import numpy as np, pendulum_lab as pl
+    >>> dp = pl.double_pendulum()
+    >>> theta0, omega0 = section_spread(dp, 5.0, orbits=6)
+    >>> theta0.shape, bool(np.allclose(dp.energy(theta0, omega0), 5.0))
+    ((6, 2), True)
+    """
+    check.double_pendulum(model)
+    energy = check.real_number("energy", energy)
+    orbits = check.integer_at_least("orbits", orbits, 2)
+    return _spread(model, energy, orbits, "energy")
+
+
+def _spread(model, energy, orbits, name):
+    """:func:`section_spread` without the checks; ``name`` is the argument an error names."""
     along_theta = orbits - orbits // 2
     grid = np.linspace(0.0, np.pi, 400)
     bottom = model.potential_energy(np.column_stack([np.zeros_like(grid), grid]))
     reach = grid[bottom < energy]
     if reach.size == 0:
         raise ValueError(
-            f"`energies` must lie above the minimum of the potential energy "
+            f"`{name}` must lie above the minimum of the potential energy "
             f"({float(bottom[0]):.6g} J), got {energy}"
         )
     theta2 = np.linspace(0.0, reach[-1], along_theta + 1)[:-1] + reach[-1] / (2 * along_theta)

@@ -14,12 +14,27 @@ Submodules
 ``standard_map``
     Symplectic Euler on the pendulum as Chirikov's standard map; transport.
 ``adaptive``
-    SciPy's adaptive solvers, a naive variable-step leapfrog and the
-    reversible Sundman-transformed adaptive leapfrog.
-``figures``
-    The figures of notebooks 13-16.
+    A naive variable-step leapfrog, the reversible Sundman-transformed
+    adaptive leapfrog and the Poincare-transformed midpoint rule (SciPy's
+    adaptive solvers are :func:`pendulum_lab.analysis.scipy_run`).
+
+Their figures are in :mod:`pendulum_lab.plotting` (``plotting.geometric``),
+the variational integrators in the registry of
+:mod:`pendulum_lab.integrators` (``VARIATIONAL_METHODS``).
 """
 
-from .backward_error import STEP_SIZE, modified_equation, modified_hamiltonian
+from .backward_error import (
+    STEP_SIZE,
+    ModifiedEnergy,
+    modified_energy,
+    modified_equation,
+    modified_hamiltonian,
+)
 
-__all__ = ["STEP_SIZE", "modified_equation", "modified_hamiltonian"]
+__all__ = [
+    "STEP_SIZE",
+    "ModifiedEnergy",
+    "modified_energy",
+    "modified_equation",
+    "modified_hamiltonian",
+]

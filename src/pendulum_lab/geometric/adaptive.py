@@ -3,7 +3,9 @@
 Three ways to vary the step, measured by what they do to the energy:
 
 * SciPy's ``solve_ivp`` (RK45, DOP853): local error control, no structure;
-  the energy error drifts linearly in time (:func:`scipy_run`).
+  the energy error drifts linearly in time
+  (:func:`pendulum_lab.analysis.scipy_run`, whose :class:`AdaptiveRun` every
+  function here returns).
 * A *naive* variable-step leapfrog: the step comes from a local error
   estimate (leapfrog against symplectic Euler). Each step is a symplectic
   map, but the sequence of maps depends on the past in a way that is neither
@@ -36,128 +38,34 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import dataclass
 
 import numpy as np
 import sympy as sp
-from scipy.integrate import solve_ivp
 
 from .. import _validation as check
-from .._validation import pendulum_model as check_model
+from ..analysis import AdaptiveRun, finite_difference_jacobian, symplectic_form_defect
 from ..mechanics import derive_chain
 from ..model import PendulumModel
 from ..simulate import step
-from .phase_space import finite_difference_jacobian, symplectic_form_defect
+from ._checks import conservative_model
 
 __all__ = [
-    "AdaptiveRun",
     "naive_adaptive_leapfrog",
     "poincare_adaptive_midpoint",
     "reversible_adaptive_leapfrog",
     "round_trip_error",
-    "scipy_run",
     "state_dependent_step_defect",
     "step_density",
 ]
 
-SCIPY_METHODS = ("RK45", "DOP853")
 
-
-@dataclass(frozen=True)
-class AdaptiveRun:
-    """A run with variable steps.
-
-    Attributes
-    ----------
-    label : str
-    t : ndarray, shape (N+1,)
-    theta, p : ndarray, shape (N+1, n)
-    energy_error : ndarray, shape (N+1,)
-        ``H(t) - H(0)``.
-    steps : int
-        Accepted steps.
-    evaluations : int
-        Right-hand-side evaluations (SciPy) or one-step calls (leapfrog
-        variants, counting rejected attempts and error estimates).
-    wall_time : float
-    """
-
-    label: str
-    t: np.ndarray
-    theta: np.ndarray
-    p: np.ndarray
-    energy_error: np.ndarray
-    steps: int
-    evaluations: int
-    wall_time: float
-
-    @property
-    def step_sizes(self) -> np.ndarray:
-        """``t[k+1] - t[k]``, shape (N,)."""
-        return np.diff(self.t)
-
-    @property
-    def drift(self) -> float:
-        """Slope [J/s] of a least-squares line through the energy error."""
-        return float(np.polyfit(self.t, self.energy_error, 1)[0])
-
-    def largest_error(self, start: float = 0.0, stop: float = np.inf) -> float:
-        """``max |H - H(0)|`` over ``start <= t <= stop``."""
-        inside = (self.t >= start) & (self.t <= stop)
-        return float(np.max(np.abs(self.energy_error[inside])))
-
-
-def _start(model, theta0, p0):
-    model = check_model(model)
+def _start(model, theta0, p0, links=None):
+    model = conservative_model(model, links)
     theta0 = check.state_array("theta0", theta0, model.n)
     p0 = check.state_array("p0", p0, model.n)
     if theta0.ndim != 1 or p0.ndim != 1:
         raise ValueError("`theta0` and `p0` must have shape (n,): one trajectory")
     return model, theta0.copy(), p0.copy()
-
-
-def scipy_run(model: PendulumModel, theta0, omega0, *, t_end: float, method: str = "DOP853",
-              rtol: float = 1e-8) -> AdaptiveRun:
-    """Integrate with :func:`scipy.integrate.solve_ivp` and record the energy at every step.
-
-    Parameters
-    ----------
-    model : PendulumModel
-    theta0, omega0 : array_like, shape (n,)
-    t_end : float
-    method : {"RK45", "DOP853"}
-    rtol : float
-        Relative tolerance in ``[1e-13, 1e-2]``; ``atol = rtol`` as well.
-
-    Examples
-    --------
-    >>> import pendulum_lab as pl
-    >>> run = scipy_run(pl.simple_pendulum(), [1.0], [0.0], t_end=10.0, method="RK45", rtol=1e-6)
-    >>> bool(run.largest_error() < 1e-3)
-    True
-    """
-    model = check_model(model)
-    n = model.n
-    theta0 = check.state_array("theta0", theta0, n)
-    omega0 = check.state_array("omega0", omega0, n)
-    t_end = check.positive_number("t_end", t_end)
-    if method not in SCIPY_METHODS:
-        raise ValueError(f"`method` must be one of {list(SCIPY_METHODS)}, got {method!r}")
-    rtol = check.positive_number("rtol", rtol)
-    if not 1e-13 <= rtol <= 1e-2:
-        raise ValueError(f"`rtol` must be in [1e-13, 1e-2], got {rtol}")
-
-    def rhs(_t, y):
-        return np.concatenate([y[n:], model.accelerations(y[:n], y[n:])])
-
-    start = time.perf_counter()
-    sol = solve_ivp(rhs, (0.0, t_end), np.concatenate([theta0, omega0]), method=method,
-                    rtol=rtol, atol=rtol)
-    wall = time.perf_counter() - start
-    theta, omega = sol.y[:n].T, sol.y[n:].T
-    energy = model.energy(theta, omega)
-    return AdaptiveRun(f"{method}, rtol {rtol:g}", sol.t, theta, model.momenta(theta, omega),
-                       energy - energy[0], len(sol.t) - 1, int(sol.nfev), wall)
 
 
 def _finish(label, model, times, thetas, ps, evaluations, start) -> AdaptiveRun:
@@ -237,8 +145,12 @@ def step_density(model: PendulumModel, theta, p, frequency: float | None = None)
     ``alpha``; it changes sign with ``p``, which makes the adaptive method
     reversible.
     """
-    w2 = model.g / model.lengths[0] if frequency is None else frequency**2
-    theta, p = np.asarray(theta, float), np.asarray(p, float)
+    model = conservative_model(model)
+    w2 = (model.g / model.lengths[0] if frequency is None
+          else check.positive_number("frequency", frequency) ** 2)
+    theta = check.state_array("theta", theta, model.n)
+    p = check.state_array("p", p, model.n)
+    check.same_shape("theta", theta, "p", p)
     omega = model.velocities(theta, p)
     alpha = model.accelerations(theta, omega)
     speed2 = np.sum(omega**2, axis=-1)
@@ -306,6 +218,11 @@ def reversible_adaptive_leapfrog(model: PendulumModel, theta0, p0, *, t_end: flo
                    ps, len(times) - 1, start)
 
 
+#: Options of :func:`round_trip_error` per method: (required, optional).
+ROUND_TRIP_OPTIONS = {"reversible": (("epsilon",), ("frequency",)),
+                      "naive": (("tol",), ("h_initial",))}
+
+
 def round_trip_error(model: PendulumModel, method: str, theta0, p0, *, steps: int,
                      **options) -> float:
     """Run ``steps`` steps forward, reverse the momenta, run ``steps`` again: distance to the start.
@@ -319,6 +236,14 @@ def round_trip_error(model: PendulumModel, method: str, theta0, p0, *, steps: in
     """
     model, theta, p = _start(model, theta0, p0)
     steps = check.integer_at_least("steps", steps, 1)
+    method = check.choice("method", method, ROUND_TRIP_OPTIONS)
+    required, optional = ROUND_TRIP_OPTIONS[method]
+    missing = [name for name in required if name not in options]
+    unknown = sorted(set(options) - set(required) - set(optional))
+    if missing or unknown:
+        raise TypeError(f"round_trip_error(method={method!r}) takes the options "
+                        f"{list(required) + list(optional)} ({', '.join(required)} required); "
+                        + (f"missing {missing}" if missing else f"unknown {unknown}"))
     if method == "reversible":
         epsilon = check.positive_number("epsilon", options["epsilon"])
         frequency = options.get("frequency")
@@ -339,8 +264,6 @@ def round_trip_error(model: PendulumModel, method: str, theta0, p0, *, steps: in
                 p2 = -p2
             for _ in range(steps):
                 theta2, p2, _, h, _ = _naive_step(model, theta2, p2, h, tol, np.inf)
-    else:
-        raise ValueError(f"`method` must be 'reversible' or 'naive', got {method!r}")
     return float(max(np.max(np.abs(theta2 - theta)), np.max(np.abs(-p2 - p))))
 
 
@@ -417,9 +340,7 @@ def poincare_adaptive_midpoint(model: PendulumModel, theta0, p0, *, t_end: float
     ----------
     HLW, Sect. VIII.2.1 (Poincare transformation); VI.3 (implicit midpoint rule).
     """
-    model, theta, p = _start(model, theta0, p0)
-    if model.n > 2:
-        raise ValueError(f"`model` must have 1 or 2 links here, got n = {model.n}")
+    model, theta, p = _start(model, theta0, p0, links=(1, 2))
     t_end = check.positive_number("t_end", t_end)
     epsilon = check.positive_number("epsilon", epsilon)
     w2 = model.g / model.lengths[0] if frequency is None else (

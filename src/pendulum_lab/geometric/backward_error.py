@@ -31,12 +31,12 @@ import numpy as np
 import sympy as sp
 
 from .. import _validation as check
-from .._validation import pendulum_model as check_model
 from ..analysis import exact_period
 from ..integrators import get_method
 from ..mechanics import derive_chain, is_identically_zero
 from ..model import PendulumModel
 from ..simulate import simulate
+from ._checks import conservative_model
 from .long_time import exact_libration
 from .modified_equations import (
     STEP_SIZE,
@@ -50,11 +50,13 @@ __all__ = [
     "STEP_SIZE",
     "DissipativeTerm",
     "EnergyDrift",
+    "ModifiedEnergy",
     "ModifiedEnergyOrders",
     "energy_drift",
     "first_dissipative_term",
     "generic_modified_hamiltonian",
     "hamiltonian_function",
+    "modified_energy",
     "modified_energy_orders",
     "modified_equation",
     "modified_hamiltonian",
@@ -100,13 +102,6 @@ def _hamiltonian_method(model: PendulumModel, method) -> str:
             f"for a modified Hamiltonian, got {name!r}"
         )
     return name
-
-
-def _check_links(model: PendulumModel, supported) -> None:
-    if model.n not in supported:
-        raise ValueError(
-            f"`model` must have {' or '.join(map(str, supported))} link(s) here, got n = {model.n}"
-        )
 
 
 @functools.cache
@@ -225,9 +220,8 @@ def modified_hamiltonian(model: PendulumModel, method, order: int) -> sp.Expr:
     >>> sp.expand(h_tilde - pl.simple_pendulum().hamiltonian)
     -g*h*p*sin(theta)/(2*l)
     """
-    model = check_model(model)
+    model = conservative_model(model, MAX_ORDER)
     name = _hamiltonian_method(model, method)
-    _check_links(model, MAX_ORDER)
     order = _order(order, MAX_ORDER[model.n], f"for n = {model.n}")
     terms = _abstract_terms(name, model.n, model.separable, order)
     total = model.hamiltonian
@@ -263,8 +257,7 @@ def modified_equation(model: PendulumModel, method, order: int) -> list[sp.Matri
     >>> modified_equation(pl.simple_pendulum(), "explicit_euler", 1)[1].T
     Matrix([[g*sin(theta)/(2*l), g*p*cos(theta)/(2*l)]])
     """
-    model = check_model(model)
-    _check_links(model, (1,))
+    model = conservative_model(model, (1,))
     name = get_method(method).name
     name = VELOCITY_TWINS.get(name, name)
     if name == "glrk8":
@@ -274,13 +267,64 @@ def modified_equation(model: PendulumModel, method, order: int) -> list[sp.Matri
 
 
 # --------------------------------------------------------------------------- numbers
+@dataclass(frozen=True)
+class ModifiedEnergy:
+    """A truncated modified Hamiltonian of one method and model, symbolic and numeric.
+
+    Attributes
+    ----------
+    expression : sympy.Expr
+        ``H~ = H + h H_1 + ... + h^order H_order`` (from :func:`modified_hamiltonian`).
+    terms : tuple of sympy.Expr
+        ``(H, H_1, ..., H_order)``.
+    method : str
+    model : PendulumModel
+    """
+
+    expression: sp.Expr
+    terms: tuple
+    method: str
+    model: PendulumModel
+
+    @property
+    def order(self) -> int:
+        """The highest power of ``h`` kept."""
+        return len(self.terms) - 1
+
+    @functools.cached_property
+    def _function(self):
+        return hamiltonian_function(self.model, self.expression)
+
+    def __call__(self, theta, p, dt: float) -> np.ndarray:
+        """``H~`` at step ``dt`` for states of shape ``(..., n)``; returns shape ``(...)``."""
+        return self._function(theta, p, float(dt))
+
+
+def modified_energy(model: PendulumModel, method, order: int) -> ModifiedEnergy:
+    """:func:`modified_hamiltonian` with its terms split out, and evaluable on states.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> energy = modified_energy(pl.simple_pendulum(), "semi_implicit_euler", 1)
+    >>> energy.terms[1]
+    -g*p*sin(theta)/(2*l)
+    >>> round(float(energy([[0.5]], [[1.0]], dt=0.1)[0]), 4)  # H - h/2 H_q H_p there
+    -8.3442
+    """
+    expression = sp.expand(modified_hamiltonian(model, method, order))
+    terms = (model.hamiltonian,) + tuple(
+        expression.coeff(STEP_SIZE, j) for j in range(1, order + 1))
+    return ModifiedEnergy(expression, terms, get_method(method).name, model)
+
+
 def hamiltonian_function(model: PendulumModel, expr):
     """``expr`` (in the model's symbols and ``h``) as a NumPy function ``f(theta, p, h)``.
 
     ``theta`` and ``p`` have shape ``(..., n)``; the model's parameter values
     are put in. Lambdified once with common subexpressions shared.
     """
-    chain = model.chain
+    chain = conservative_model(model).chain
     args = (*chain.q, *chain.p, STEP_SIZE)
     expr = sp.sympify(expr).xreplace(model.parameter_values)
     fn = sp.lambdify(args, expr, modules="numpy", cse=True)
@@ -347,9 +391,11 @@ def modified_energy_orders(model: PendulumModel, method, theta0, omega0, *, dts,
     -------
     ModifiedEnergyOrders
     """
-    model = check_model(model)
+    model = conservative_model(model, MAX_ORDER)
     name = _hamiltonian_method(model, method)
-    orders = tuple(_order(k, MAX_ORDER.get(model.n, 0), f"for n = {model.n}") for k in orders)
+    orders = tuple(_order(k, MAX_ORDER[model.n], f"for n = {model.n}") for k in orders)
+    if not orders:
+        raise ValueError("`orders` must name at least one truncation order")
     dts = np.asarray([check.positive_number("dts", dt) for dt in dts])
     if dts.size < 2:
         raise ValueError(f"`dts` must hold at least two step sizes, got {dts.size}")
@@ -414,8 +460,7 @@ def first_dissipative_term(model: PendulumModel, method, max_power: int = 6) -> 
     >>> first_dissipative_term(pl.simple_pendulum(), "explicit_euler").power
     1
     """
-    model = check_model(model)
-    _check_links(model, (1,))
+    model = conservative_model(model, (1,))
     max_power = _order(max_power, MAX_FIELD_ORDER - 1, "for the modified equation")
     theta, p = model.chain.q[0], model.chain.p[0]
     fields = modified_equation(model, method, max_power)
@@ -488,6 +533,9 @@ def energy_drift(model: PendulumModel, method, amplitude: float, *, dts,
     term = first_dissipative_term(model, method)
     t_end = check.positive_number("t_end", t_end)
     dts = np.asarray([check.positive_number("dts", dt) for dt in dts])
+    if dts.size < 2:
+        raise ValueError(f"`dts` must hold at least two step sizes (for the exponent), got "
+                         f"{dts.size}")
     period = exact_period(model, amplitude)
     times = np.arange(512) * period / 512
     theta, p = exact_libration(model, amplitude, times)

@@ -50,6 +50,8 @@ import math
 
 import sympy as sp
 
+from .. import _validation as check
+
 __all__ = [
     "SERIES_METHODS",
     "STEP_SIZE",
@@ -278,6 +280,10 @@ def step_series(method: str, hamiltonian, q, p, order: int) -> list[list]:
     [x, v, -x/2]
     """
     method = _check_method_name(method)
+    order = check.integer_at_least("order", order, 1)
+    if len(q) != len(p) or not q:
+        raise ValueError(f"`q` and `p` must be sequences of the same length >= 1, got "
+                         f"{len(q)} and {len(p)}")
     problem = _Problem(hamiltonian, q, p, order)
     q1, p1 = SERIES_METHODS[method](problem)
     return [[sp.expand(c) for c in s] for s in q1 + p1]
@@ -381,6 +387,7 @@ def elementary_hamiltonians(hamiltonian, q, p, nodes: int) -> list:
     list of sympy.Expr
         Expanded, without zeros or repeats.
     """
+    nodes = check.integer_at_least("nodes", nodes, 1)
     n = len(q)
     found, seen = {}, set()
     for edges in _labelled_trees(nodes):
@@ -450,6 +457,9 @@ def hamiltonian_of_field(field, hamiltonian, q, p, nodes: int):
         If no combination reproduces ``field``: it is not a Hamiltonian
         vector field (the method is not symplectic at this order).
     """
+    nodes = check.integer_at_least("nodes", nodes, 1)
+    if len(field) != len(q) + len(p):
+        raise ValueError(f"`field` must have 2n = {len(q) + len(p)} components, got {len(field)}")
     if all(sp.expand(c) == 0 for c in field):
         return _ZERO
     candidates = elementary_hamiltonians(hamiltonian, q, p, nodes)
@@ -478,6 +488,7 @@ def abstract_problem(n: int, separable: bool):
     Returns ``(q, p, H)`` with ``H = H(q, p)``, or ``T(p) + U(q)`` when
     ``separable``.
     """
+    n = check.integer_at_least("n", n, 1)
     q = sp.symbols(f"q1:{n + 1}") if n > 1 else (sp.Symbol("q"),)
     p = sp.symbols(f"p1:{n + 1}") if n > 1 else (sp.Symbol("p"),)
     if separable:

@@ -36,7 +36,7 @@ import numpy as np
 
 from .. import _validation as check
 from .._validation import pendulum_model as check_model
-from ..analysis import step_jacobian
+from ..analysis import step_jacobian, symplectic_form_defect
 from ..integrators import get_method
 from ..model import PendulumModel
 from ..simulate import simulate
@@ -45,11 +45,9 @@ __all__ = [
     "LoopAreas",
     "carried_loop_areas",
     "ellipse_loop",
-    "finite_difference_jacobian",
     "jacobian_along_orbit",
     "jacobian_properties",
     "polygon_area",
-    "symplectic_form_defect",
 ]
 
 
@@ -76,6 +74,7 @@ def ellipse_loop(center, axes, points: int) -> np.ndarray:
            [-1.,  0.],
            [ 0., -2.]])
     """
+    points = check.integer_at_least("points", points, 3)
     center = np.asarray(center, float)
     axes = np.asarray(axes, float)
     if center.ndim != 1 or center.size % 2 or axes.shape != (2, center.size):
@@ -99,6 +98,9 @@ def polygon_area(x, y) -> np.ndarray:
     1.0
     """
     x, y = np.asarray(x, float), np.asarray(y, float)
+    if x.shape != y.shape or x.ndim == 0:
+        raise ValueError(f"`x` and `y` must be arrays of the same shape (points along the last "
+                         f"axis), got shapes {x.shape} and {y.shape}")
     return 0.5 * np.sum(x * np.roll(y, -1, axis=-1) - np.roll(x, -1, axis=-1) * y, axis=-1)
 
 
@@ -250,50 +252,6 @@ def carried_loop_areas(model: PendulumModel, method, center, axes, *, t_end: flo
     loops = np.concatenate([loop.theta, loop.p], axis=-1)
     return LoopAreas(get_method(method).name, float(dt), loop.t, estimate[0], estimate[1],
                      points, float(error), loops)
-
-
-def finite_difference_jacobian(function, z, delta: float = 1e-6) -> np.ndarray:
-    """Jacobian of a map ``z -> function(z)`` of ``R^d`` by central differences.
-
-    For maps that :func:`pendulum_lab.analysis.step_jacobian` does not cover
-    (a variable step, a reference solver); accurate to about ``delta^2``
-    times the third derivatives plus round-off over ``delta``.
-
-    Examples
-    --------
-    >>> finite_difference_jacobian(lambda z: np.array([z[0] * z[1], z[0]]), [2.0, 3.0]).round(8)
-    array([[3., 2.],
-           [1., 0.]])
-    """
-    z = np.asarray(z, float)
-    columns = []
-    for k in range(z.size):
-        dz = np.zeros(z.size)
-        dz[k] = delta
-        columns.append((np.asarray(function(z + dz), float)
-                        - np.asarray(function(z - dz), float)) / (2 * delta))
-    return np.array(columns).T
-
-
-def symplectic_form_defect(matrix) -> float:
-    """``max |Psi^T J Psi - J|`` for a ``(2n, 2n)`` matrix ``Psi`` in ``(q, p)`` order.
-
-    Zero exactly for a symplectic matrix. A unit determinant is necessary
-    but, for ``n >= 2``, not sufficient:
-
-    Examples
-    --------
-    >>> stretch = np.diag([2.0, 1.0, 1.0, 0.5])   # det 1, but q1 and p1 are not paired
-    >>> float(np.linalg.det(stretch)), symplectic_form_defect(stretch)
-    (1.0, 1.0)
-    """
-    psi = np.asarray(matrix, float)
-    dim = psi.shape[0]
-    if psi.shape != (dim, dim) or dim % 2:
-        raise ValueError(f"`matrix` must be square of even size (2n, 2n), got shape {psi.shape}")
-    n = dim // 2
-    j = np.block([[np.zeros((n, n)), np.eye(n)], [-np.eye(n), np.zeros((n, n))]])
-    return float(np.max(np.abs(psi.T @ j @ psi - j)))
 
 
 def jacobian_properties(model: PendulumModel, method, theta, p, dt: float) -> tuple[float, float]:

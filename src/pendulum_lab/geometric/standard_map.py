@@ -117,7 +117,8 @@ def iterate(phi, action, k: float, iterations: int, wrap: bool = True):
 
     Returns
     -------
-    phi, action : ndarray, shape (iterations + 1, *shape)
+    phi, action : ndarray, shape (iterations + 1, ...)
+        The starting shape after the iteration axis.
 
     Examples
     --------
@@ -129,7 +130,12 @@ def iterate(phi, action, k: float, iterations: int, wrap: bool = True):
     if k < 0:
         raise ValueError(f"`k` must be >= 0, got {k}")
     iterations = check.integer_at_least("iterations", iterations, 0)
-    phi, action = np.broadcast_arrays(np.asarray(phi, float), np.asarray(action, float))
+    phi, action = np.asarray(phi, float), np.asarray(action, float)
+    try:
+        phi, action = np.broadcast_arrays(phi, action)
+    except ValueError:
+        raise ValueError(f"`phi` and `action` must have the same shape (or broadcast), got "
+                         f"{phi.shape} and {action.shape}") from None
     phis = np.empty((iterations + 1, *phi.shape))
     actions = np.empty_like(phis)
     phis[0], actions[0] = phi, action
@@ -175,6 +181,8 @@ def first_crossings(ks, phi0, action0, max_iterations: int) -> np.ndarray:
         ``-1`` for an orbit that did not cross within ``max_iterations``.
     """
     ks = np.ascontiguousarray(np.atleast_1d(np.asarray(ks, float)))
+    if ks.ndim != 1:
+        raise ValueError(f"`ks` must be a number or a 1-d array, got shape {ks.shape}")
     phi0, action0 = (np.ascontiguousarray(np.atleast_1d(np.asarray(x, float)))
                      for x in (phi0, action0))
     if phi0.shape != action0.shape or phi0.ndim != 1:
@@ -239,7 +247,10 @@ def transport_threshold(iterations=(100, 1000, 10_000, 100_000), *, ks=None,
     -------
     TransportThreshold
     """
-    iterations = np.array([check.integer_at_least("iterations", int(n), 1) for n in iterations])
+    if isinstance(iterations, str) or not np.iterable(iterations) or len(iterations) == 0:
+        raise TypeError(f"`iterations` must be a non-empty sequence of run lengths (integers "
+                        f">= 1), got {iterations!r}")
+    iterations = np.array([check.integer_at_least("iterations", n, 1) for n in iterations])
     ks = np.arange(0.90, 2.0 + 1e-9, 0.005) if ks is None else np.asarray(ks, float)
     if ks.ndim != 1 or ks.size < 2 or np.any(np.diff(ks) <= 0):
         raise ValueError("`ks` must be an increasing 1-d grid of at least two values")

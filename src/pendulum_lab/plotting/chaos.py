@@ -13,13 +13,17 @@ from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap, LogNorm
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from .. import _validation as check
-from .figures import get_axes, new_figure
+from .figures import axis_label, get_axes, new_figure, subscript
 
 __all__ = [
     "plot_flip_map",
+    "plot_landing_errors",
     "plot_lyapunov",
+    "plot_lyapunov_energy",
+    "plot_lyapunov_spectrum",
     "plot_parting",
     "plot_section",
     "plot_sections",
@@ -32,7 +36,7 @@ def plot_separation(sep, ax: Axes | None = None, label=None, **kwargs) -> Figure
     """Distance against time on a log scale, for a :class:`~pendulum_lab.chaos.Separation`."""
     ax = get_axes(ax)
     ax.semilogy(sep.t, sep.distance, label=label, **kwargs)
-    ax.set(xlabel="t (s)", ylabel="distance in (theta, p)")
+    ax.set(xlabel=axis_label("t"), ylabel="distance in (θ, p)")
     if label is not None:
         ax.legend(fontsize="small")
     return ax.figure
@@ -49,7 +53,46 @@ def plot_lyapunov(estimate, ax: Axes | None = None, label=None, **kwargs) -> Fig
     lines = ax.semilogx(estimate.t, estimate.running.reshape(len(estimate.t), -1), **kwargs)
     lines[0].set_label(label)
     ax.axhline(0.0, color="0.6", lw=0.8)
-    ax.set(xlabel="t (s)", ylabel="running estimate of lambda_1 (1/s)")
+    ax.set(xlabel=axis_label("t"), ylabel="running estimate of lambda_1 (1/s)")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_lyapunov_energy(scan, ax: Axes | None = None) -> Figure:
+    """Exponent against energy for a :class:`~pendulum_lab.chaos.EnergyLyapunov`.
+
+    Every orbit is a dot (hollow if it counts as regular); the line joins the
+    means over the chaotic orbits of each energy, with their standard errors.
+    """
+    ax = get_axes(ax, width=6.4, height=4.0)
+    regular = scan.regular
+    ax.scatter(scan.energy[~regular], scan.exponent[~regular], s=12, color="0.55",
+               linewidths=0, label="one orbit (chaotic)")
+    ax.scatter(scan.energy[regular], scan.exponent[regular], s=14, facecolors="none",
+               edgecolors="0.35", linewidths=0.8, label="one orbit (regular)")
+    rows = scan.per_energy()
+    energy = np.array([row.energy for row in rows])
+    mean = np.array([row.mean for row in rows])
+    error = np.array([row.standard_error for row in rows])
+    ax.errorbar(energy, mean, yerr=error, color="C3", marker="o", ms=4, capsize=3,
+                label="mean over the chaotic orbits")
+    ax.axhline(scan.threshold, color="0.6", lw=0.8, ls="--")
+    ax.set(xlabel="energy E (J)", ylabel=f"lambda_1 after {scan.t_end:g} s (1/s)",
+           title=f"{scan.method}, dt = {scan.dt:g} s; dashed: regular below "
+                 f"{scan.threshold:g} 1/s")
+    ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_landing_errors(errors, ax: Axes | None = None, **kwargs) -> Figure:
+    """A :class:`~pendulum_lab.chaos.LandingErrors`: error against crossing speed, log-log."""
+    ax = get_axes(ax, width=6.0, height=4.0)
+    order = np.argsort(errors.speed)
+    kwargs.setdefault("label", f"{errors.landing}, {errors.method}, dt = {errors.dt:g} s")
+    ax.loglog(errors.speed[order], errors.state_error[order], "o-", ms=4, **kwargs)
+    ax.xaxis.set_minor_formatter(NullFormatter())  # a short range labels its minor ticks
+    ax.set(xlabel="speed of the crossing |theta' of the surface's link| (rad/s)",
+           ylabel="distance from the exact crossing")
     ax.legend(fontsize="small")
     return ax.figure
 
@@ -66,7 +109,8 @@ def plot_section(section, ax: Axes | None = None, link: int | None = None, s: fl
     ax.scatter(
         x, y, c=section.orbit % 20, s=s, cmap="tab20", vmin=0, vmax=19, linewidths=0, **kwargs
     )
-    ax.set(xlabel=f"theta{link + 1} (rad)", ylabel=f"p{link + 1} (kg m^2/s)")
+    sub = subscript(link + 1)
+    ax.set(xlabel=axis_label("theta", sub), ylabel=axis_label("p", sub))
     return ax.figure
 
 
@@ -150,7 +194,7 @@ def plot_small_angle(comparison, ax: Axes | None = None, member=()) -> Figure:
     parting = np.asarray(comparison.parting_time)[member]
     if np.isfinite(parting):
         ax.axvline(parting, color="k", lw=0.8, ls=":", label="they part")
-    ax.set(xlabel="t (s)", ylabel="angle (rad)")
+    ax.set(xlabel=axis_label("t"), ylabel="angle (rad)")
     ax.legend(fontsize="small", ncol=2)
     return ax.figure
 
@@ -185,4 +229,25 @@ def plot_parting(comparison, amplitudes, ax: Axes | None = None) -> Figure:
         )
     ax.set(xlabel="release amplitude (rad)", ylabel="parting time (s)")
     ax.legend(fontsize="small")
+    return ax.figure
+
+
+def plot_lyapunov_spectrum(spectrum, ax: Axes | None = None, member=(), **kwargs) -> Figure:
+    """Running estimates of every exponent of a :class:`~pendulum_lab.chaos.LyapunovSpectrum`.
+
+    ``member`` picks one member of an ensemble; the dotted line is the sum
+    of the exponents (the mean contraction rate of phase-space volume).
+    """
+    ax = get_axes(ax)
+    member = (member,) if np.ndim(member) == 0 and member != () else tuple(member)
+    running = spectrum.running[(slice(None), *member)]
+    if running.ndim != 2:
+        raise ValueError(f"`member` must pick one member of the ensemble shape "
+                         f"{spectrum.running.shape[1:-1]}, got {member}")
+    for i in range(running.shape[-1]):
+        ax.semilogx(spectrum.t, running[:, i], label=f"lambda{subscript(i + 1)}", **kwargs)
+    ax.semilogx(spectrum.t, running.sum(axis=-1), ":", color="k", label="sum")
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set(xlabel="t (s)", ylabel="running estimate (1/s)")
+    ax.legend(fontsize="small", ncol=2)
     return ax.figure

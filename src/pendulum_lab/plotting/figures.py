@@ -11,6 +11,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from .. import _validation as check
 from .._angles import wrap_angle
 from ..simulate import Trajectory
 
@@ -18,11 +19,14 @@ __all__ = [
     "KINETIC",
     "LIBRATION",
     "POTENTIAL",
+    "QUANTITIES",
     "ROTATION",
     "SEPARATRIX",
     "TOTAL",
+    "axis_label",
     "broken_at_wraps",
     "get_axes",
+    "get_axes_grid",
     "link_label",
     "new_figure",
     "single_trajectory",
@@ -35,6 +39,16 @@ KINETIC, POTENTIAL, TOTAL = "tab:blue", "tab:orange", "black"
 LIBRATION, ROTATION, SEPARATRIX = "tab:blue", "tab:green", "tab:red"
 
 _SUBSCRIPTS = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+#: Symbol and unit of the quantities the figures share, for :func:`axis_label`.
+QUANTITIES = {
+    "t": ("t", "s"),
+    "theta": ("θ", "rad"),
+    "omega": ("ω", "rad/s"),
+    "p": ("p", "kg m²/s"),
+    "energy": ("E", "J"),
+    "step": ("step h", "s"),
+}
 
 
 def new_figure(
@@ -56,6 +70,36 @@ def get_axes(ax: Axes | None, **figure_kw) -> Axes:
     if not isinstance(ax, Axes):
         raise TypeError(f"`ax` must be a matplotlib Axes or None, got {type(ax).__name__}")
     return ax
+
+
+def get_axes_grid(axes, count: int, ncols: int, *, width: float = 12.0, height: float = 3.6,
+                  **subplot_kw):
+    """``(figure, flat array of axes)`` for ``count`` panels in ``ncols`` columns.
+
+    ``axes`` (several Axes, checked) when given, else a new :func:`new_figure`
+    of ``ceil(count / ncols)`` rows (``height`` per row).
+    """
+    if axes is None:
+        nrows = -(-count // ncols)
+        fig, grid = new_figure(nrows, ncols, width=width, height=height, **subplot_kw)
+        return fig, np.atleast_1d(grid).ravel()
+    axes = np.atleast_1d(axes).ravel()
+    if axes.size < count or not all(isinstance(ax, Axes) for ax in axes):
+        raise ValueError(f"`axes` must hold at least {count} matplotlib Axes, got {axes.size} "
+                         "objects")
+    return axes[0].figure, axes
+
+
+def axis_label(quantity: str, sub: str = "") -> str:
+    """``"θ₂ (rad)"``: the label of a quantity of :data:`QUANTITIES`, with a subscript.
+
+    Examples
+    --------
+    >>> axis_label("theta", link_label(1, 2)), axis_label("t")
+    ('θ₂ (rad)', 't (s)')
+    """
+    symbol, unit = QUANTITIES[check.choice("quantity", quantity, QUANTITIES)]
+    return f"{symbol}{sub} ({unit})"
 
 
 def single_trajectory(traj: Trajectory) -> Trajectory:

@@ -11,16 +11,26 @@ where a rotating link jumps from ``pi`` to ``-pi``.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from .. import _validation as check
-from ..analysis import equilibrium_angles, exact_period, find_equilibrium, linearized_solution
+from ..analysis import (
+    equilibrium_angles,
+    exact_period,
+    find_equilibrium,
+    linearized_solution,
+    normal_modes,
+)
 from ..analysis import spectrum as power_spectrum
 from ..model import PendulumModel
 from ..simulate import Trajectory
+
+if TYPE_CHECKING:  # geometric imports plotting's neighbours; only the type is needed here
+    from ..geometric import ModifiedEnergy
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -28,6 +38,7 @@ from .figures import (
     ROTATION,
     SEPARATRIX,
     TOTAL,
+    axis_label,
     broken_at_wraps,
     get_axes,
     link_label,
@@ -44,6 +55,8 @@ __all__ = [
     "plot_energy_error",
     "plot_linear_vs_nonlinear",
     "plot_link_projections",
+    "plot_modified_level_sets",
+    "plot_normal_modes",
     "plot_period_vs_amplitude",
     "plot_phase",
     "plot_phase_portrait",
@@ -69,7 +82,7 @@ def plot_energy(traj: Trajectory, ax: Axes | None = None) -> Figure:
     ax.plot(traj.t, traj.potential, color=POTENTIAL, label="potential V")
     ax.plot(traj.t, traj.energy, color=TOTAL, lw=2, label="total E = T + V")
     ax.set(
-        xlabel="t (s)",
+        xlabel=axis_label("t"),
         ylabel="energy (J)",
         title=f"Energy ({traj.method.name}, dt = {traj.dt:g} s)",
     )
@@ -90,7 +103,7 @@ def plot_energy_error(traj: Trajectory, ax: Axes | None = None, relative: bool =
     if np.any(np.isfinite(shown)):
         ax.set_yscale("log")
     ylabel = "|E - E(0)| / |E(0)|" if relative else "|E - E(0)| (J)"
-    ax.set(xlabel="t (s)", ylabel=ylabel, title=f"Energy error ({traj.method.name})")
+    ax.set(xlabel=axis_label("t"), ylabel=ylabel, title=f"Energy error ({traj.method.name})")
     return ax.figure
 
 
@@ -101,7 +114,7 @@ def plot_angles(traj: Trajectory, ax: Axes | None = None) -> Figure:
     n = traj.theta.shape[1]
     for i in range(n):
         ax.plot(traj.t, traj.theta[:, i], label=f"θ{link_label(i, n)}")
-    ax.set(xlabel="t (s)", ylabel="angle (rad)", title="Angles")
+    ax.set(xlabel=axis_label("t"), ylabel="angle (rad)", title="Angles")
     if n > 1:
         ax.legend(loc="upper right", fontsize="small")
     return ax.figure
@@ -129,8 +142,8 @@ def plot_phase(traj: Trajectory, ax: Axes | None = None, link: int | None = None
     single_link = len(links) == 1 and n > 1
     sub = link_label(links[0], n) if len(links) == 1 else "ᵢ"
     ax.set(
-        xlabel=f"θ{sub} (rad)",
-        ylabel=f"ω{sub} (rad/s)",
+        xlabel=axis_label("theta", sub),
+        ylabel=axis_label("omega", sub),
         title=f"Arm {links[0] + 1}" if single_link else "Phase space",
         xlim=(-np.pi, np.pi),
     )
@@ -177,7 +190,8 @@ def plot_phase_portrait(
     rotations (``E > m g l``) green, and the separatrix ``E = m g l`` through
     the upright saddle red. The center at ``(0, 0)`` and the saddles at
     ``(+-pi, 0)`` are marked. A ``trajectory`` is drawn on top (thick, with its
-    start marked).
+    start marked), its angles wrapped into ``(-pi, pi]``; the window grows
+    to hold all of it.
 
     Parameters
     ----------
@@ -185,7 +199,8 @@ def plot_phase_portrait(
         A simple pendulum.
     omega_max : float, optional
         Half-height of the window [rad/s]; default 1.6 times the separatrix's
-        top speed ``2 sqrt(g / l)``.
+        top speed ``2 sqrt(g / l)``. If the ``trajectory`` is faster
+        somewhere, the window widens to 1.08 times its largest ``|omega|``.
     libration_levels, rotation_levels : int
         How many level sets of each kind to draw.
     """
@@ -198,6 +213,12 @@ def plot_phase_portrait(
     mass, length, g = model.masses[0], model.lengths[0], model.g
     top_speed = 2.0 * np.sqrt(abs(g) / length)
     omega_max = 1.6 * top_speed if omega_max is None else float(omega_max)
+    traj = None if trajectory is None else single_trajectory(trajectory)
+    if traj is not None:
+        speeds = np.abs(traj.omega[:, 0])
+        speeds = speeds[np.isfinite(speeds)]
+        if speeds.size and speeds.max() > omega_max:
+            omega_max = 1.08 * float(speeds.max())
     theta = np.linspace(-np.pi, np.pi, 401)
     omega = np.linspace(-omega_max, omega_max, 401)
     big_theta, big_omega = np.meshgrid(theta, omega)
@@ -233,20 +254,105 @@ def plot_phase_portrait(
     ax.plot([], [], color=LIBRATION, label="libration")
     ax.plot([], [], color=ROTATION, label="rotation")
     ax.plot([], [], color=SEPARATRIX, lw=2, label="separatrix")
-    if trajectory is not None:
-        traj = single_trajectory(trajectory)
+    if traj is not None:
         x, y = broken_at_wraps(traj.theta[:, 0], traj.omega[:, 0])
         ax.plot(x, y, color="black", lw=2.2, label="trajectory")
         ax.plot(x[0], y[0], "o", color="gold", mec="black", ms=9, zorder=5)
     ax.set(
-        xlabel="θ (rad)",
-        ylabel="ω (rad/s)",
+        xlabel=axis_label("theta"),
+        ylabel=axis_label("omega"),
         xlim=(-np.pi, np.pi),
         ylim=(-omega_max, omega_max),
         title="Phase portrait of the simple pendulum",
     )
     ax.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
     return ax.figure
+
+
+def plot_modified_level_sets(
+    traj: Trajectory, modified: ModifiedEnergy, ax: Axes | None = None
+) -> Figure:
+    """A numerical orbit on the level set of the modified energy, beside that of ``H``.
+
+    In the canonical plane ``(theta, p)`` of a simple pendulum: the level set
+    of ``H`` through the orbit's start (dashed), the level set of the modified
+    Hamiltonian ``H~`` at the trajectory's step through the same start
+    (solid), and the computed states (dots). A symplectic method's states
+    follow the solid curve, not the dashed one.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        One run of the method ``modified`` belongs to, on ``modified.model``.
+    modified : ModifiedEnergy
+        From :func:`pendulum_lab.geometric.modified_energy`.
+    ax : Axes, optional
+    """
+    traj = single_trajectory(traj)
+    if traj.method.name != modified.method:
+        raise ValueError(
+            f"`traj` was computed with {traj.method.name!r}, but `modified` belongs to "
+            f"{modified.method!r}"
+        )
+    model = modified.model
+    ax = get_axes(ax, width=6.0, height=4.6)
+    theta, p = traj.theta[:, 0], traj.p[:, 0]
+    pad_theta, pad_p = 0.15 * np.ptp(theta) + 0.05, 0.15 * np.ptp(p) + 0.05
+    grid_theta, grid_p = np.meshgrid(
+        np.linspace(theta.min() - pad_theta, theta.max() + pad_theta, 401),
+        np.linspace(p.min() - pad_p, p.max() + pad_p, 401),
+    )
+    exact = model.hamiltonian_value(grid_theta[..., None], grid_p[..., None])
+    tilde = modified(grid_theta[..., None], grid_p[..., None], traj.dt)
+    start_exact = float(model.hamiltonian_value(traj.theta[0], traj.p[0]))
+    start_tilde = float(modified(traj.theta[0], traj.p[0], traj.dt))
+    ax.contour(grid_theta, grid_p, exact, levels=[start_exact], colors="0.45",
+               linestyles="dashed", linewidths=1.4)
+    ax.contour(grid_theta, grid_p, tilde, levels=[start_tilde], colors="tab:blue",
+               linewidths=1.6)
+    ax.plot(theta, p, ".", color="tab:red", ms=4, zorder=3)
+    ax.plot([], [], "--", color="0.45", label="level set of H")
+    ax.plot([], [], color="tab:blue",
+            label=f"level set of the modified H (terms to h^{modified.order})")
+    ax.plot([], [], ".", color="tab:red", label=f"{traj.method.name}, h = {traj.dt:g} s")
+    ax.set(xlabel="θ (rad)", ylabel="p (kg m²/s)",
+           title="The numerical orbit lies on a level set of the modified energy")
+    ax.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
+    return ax.figure
+
+
+def plot_normal_modes(model: PendulumModel, amplitude: float = 0.35, axes=None) -> Figure:
+    """The shape of each normal mode: the chain at both turning points of the mode.
+
+    One panel per mode, slowest first: the chain at ``+amplitude`` (solid) and
+    ``-amplitude`` (dashed) times the mode shape (scaled so that its largest
+    angle is ``amplitude`` [rad]), with the hanging chain dotted. The title
+    gives the mode's angular frequency and its shape (first link's angle 1).
+    """
+    frequencies, shapes = normal_modes(model)
+    amplitude = check.positive_number("amplitude", amplitude)
+    n = model.n
+    if axes is None:
+        axes = new_figure(1, n, width=3.4 * n, height=3.6)[1]
+    axes = np.atleast_1d(axes)
+    if len(axes) != n:
+        raise ValueError(f"`axes` must hold one axes per mode ({n}), got {len(axes)}")
+    reach = 1.1 * sum(model.lengths)
+    for k, (ax, omega, shape) in enumerate(zip(axes, frequencies, shapes)):
+        angles = amplitude * shape / np.max(np.abs(shape))
+        rest_x, rest_y = model.positions(np.zeros(n))
+        ax.plot(np.r_[0.0, rest_x], np.r_[0.0, rest_y], ":", color="0.6", lw=1.5)
+        for sign, style in ((1.0, "-"), (-1.0, "--")):
+            x, y = model.positions(sign * angles)
+            ax.plot(np.r_[0.0, x], np.r_[0.0, y], style, color="0.25", lw=2)
+            ax.scatter(x, y, s=60, color="tab:red" if sign > 0 else "white",
+                       edgecolor="black", zorder=3)
+        ax.plot([0], [0], "s", color="black", ms=6, zorder=4)
+        written = ", ".join(f"{value:.3g}" for value in shape)
+        ax.set(xlim=(-0.75 * reach, 0.75 * reach), ylim=(-reach, 0.15 * reach), aspect="equal",
+               xlabel="x (m)", title=f"mode {k + 1}: ω = {omega:.3f} rad/s\nshape ({written})")
+    axes[0].set_ylabel("y (m)")
+    return axes[0].figure
 
 
 # --------------------------------------------------------------------------- configuration
@@ -317,7 +423,7 @@ def plot_linear_vs_nonlinear(
                 color=f"C{i}",
                 label=f"θ{link_label(i, n)} − θ{link_label(i, n)}*",
             )
-        ax.set(xlabel="t (s)", title=f"{title} near {eq.name}")
+        ax.set(xlabel=axis_label("t"), title=f"{title} near {eq.name}")
         ax.legend(loc="upper left", fontsize="small")
     axes[0].set_ylabel("offset from equilibrium (rad)")
     return axes[0].figure

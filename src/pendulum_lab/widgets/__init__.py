@@ -1,6 +1,6 @@
-"""Interactive instruments: ipywidgets controls driving a simulation and a matplotlib figure.
+"""Interactive instruments: controls driving a simulation, drawn in the kernel or in the browser.
 
-Three explorers share one machinery (:class:`Instrument`): a dict of
+The explorers share one machinery (:class:`Instrument`): a dict of
 controls, a status line, and a figure rendered to PNG into an
 ``ipywidgets.Image``. Every control has ``continuous_update=False``: the
 simulation reruns when a slider is released, not while it moves.
@@ -12,11 +12,23 @@ simulation reruns when a slider is released, not while it moves.
 * :func:`explore_energy` -- pick the total energy; the chain starts at rest
   on that energy level and each link's phase-space projection is drawn.
 
+Drawn in the browser (``anywidget``; the kernel computes and sends the
+numbers once as binary buffers, small ES modules shipped in ``static/``
+draw them; nothing is fetched from a CDN):
+
+* :func:`live_simulator` -- the course's simulator: the pendulum played at
+  the display's frame rate, energy bars and the energy-error trace, drag a
+  bob to restart from there, keyboard controls.
+* :func:`section_explorer` -- a Poincare section of the double pendulum; a
+  click launches the orbit through that point on the chosen energy surface.
+* :func:`portrait_explorer` -- the simple pendulum's phase portrait; a click
+  launches the orbit through that point.
+
 In a notebook cell, ``pl.widgets.explore(model)`` shows the explorer. Its
-display carries the widget and a picture of the current figure
-(``image/png``, or ``image/jpeg`` for the simulator): a live front end shows
-the widget, a static page (the course website, a notebook viewer) the
-picture. Each explorer keeps what it shows inspectable:
+display carries the widget and a picture of what it shows (``image/png``, or
+``image/jpeg`` for the simulator): a live front end shows the widget, a
+static page (the course website, a notebook viewer) the picture. Each
+explorer keeps what it shows inspectable:
 ``controls`` (name -> widget), ``trajectory``, ``figure``, ``message`` and
 ``update()``, so it can be driven without a browser::
 
@@ -30,10 +42,19 @@ readable sentence in ``message`` instead of raising.
 
 Layout: :mod:`.controls` (the sliders every instrument shares, also used by
 :mod:`pendulum_lab.animation`), :mod:`.instrument` (the machinery),
-:mod:`.explorers`, :mod:`.panels` (extra explorer panels). Browser-side
-instruments go in ``live.py`` with their ES modules and CSS in ``static/``.
+:mod:`.explorers`, :mod:`.panels` (extra explorer panels); browser-drawn:
+:mod:`.channel` (binary messages to the browser), :mod:`.live` (the live
+simulator), :mod:`.clickable` (click to launch), ``static/`` (their ES
+modules and stylesheet).
 """
 
+from .clickable import (
+    PortraitExplorer,
+    SectionExplorer,
+    portrait_explorer,
+    section_explorer,
+    section_reach,
+)
 from .controls import DT_CHOICES, MAX_STEPS
 from .explorers import (
     EnergyExplorer,
@@ -44,6 +65,7 @@ from .explorers import (
     explore_equilibrium,
 )
 from .instrument import Instrument
+from .live import LiveSimulator, live_simulator
 from .panels import separation_panel
 
 __all__ = [
@@ -53,8 +75,15 @@ __all__ = [
     "EquilibriumExplorer",
     "Explorer",
     "Instrument",
+    "LiveSimulator",
+    "PortraitExplorer",
+    "SectionExplorer",
     "explore",
     "explore_energy",
     "explore_equilibrium",
+    "live_simulator",
+    "portrait_explorer",
+    "section_explorer",
+    "section_reach",
     "separation_panel",
 ]

@@ -1,10 +1,12 @@
-"""The controls the explorers and the simulator share: sliders, dropdowns, their model.
+"""The controls the explorers and the simulators share: sliders, dropdowns, their model.
 
-A public internal module: :mod:`pendulum_lab.widgets` and
-:mod:`pendulum_lab.animation` build their panels from these pieces, and a new
-instrument (a live simulator, say) should too. Control names are fixed:
-``theta1``, ..., ``omega1``, ..., ``m1``, ..., ``l1``, ..., ``g``, ``method``,
-``dt``, ``t_end`` (``theta``, ``omega``, ``mass``, ``length`` for one link).
+A public internal module: the explorers of :mod:`pendulum_lab.widgets`, the
+matplotlib simulator of :mod:`pendulum_lab.animation` and the browser-drawn
+instruments of :mod:`pendulum_lab.widgets.live` and
+:mod:`pendulum_lab.widgets.clickable` build their panels from these pieces,
+and a new instrument should too. Control names are fixed: ``theta1``, ...,
+``omega1``, ..., ``m1``, ..., ``l1``, ..., ``g``, ``method``, ``dt``,
+``t_end`` (``theta``, ``omega``, ``mass``, ``length`` for one link).
 """
 
 from __future__ import annotations
@@ -23,11 +25,16 @@ from ..simulate import Trajectory, simulate, step_count
 __all__ = [
     "DT_CHOICES",
     "MAX_STEPS",
+    "SIMULATOR_T_END",
+    "SPEEDS",
+    "TRAIL",
+    "build_simulator",
     "check_steps",
     "column",
     "control_names",
     "model_from_controls",
     "parameter_controls",
+    "pendulum_controls",
     "run_controls",
     "simulate_controls",
     "slider",
@@ -40,6 +47,12 @@ __all__ = [
 DT_CHOICES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5)
 #: Largest number of steps one update may take (``t_end / dt``).
 MAX_STEPS = 100_000
+#: Playback speeds the simulators offer: simulated seconds per real second.
+SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+#: Default length of the trail behind the last bob [s].
+TRAIL = 2.0
+#: The range of a simulator's run length ``t_end`` [s].
+SIMULATOR_T_END = (1.0, 60.0)
 
 DESCRIPTION_WIDTH = "88px"
 SLIDER_WIDTH = "310px"
@@ -154,6 +167,12 @@ def model_from_controls(n: int, controls: dict) -> PendulumModel:
 
 
 def state_from_controls(n: int, controls: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The initial angles [rad] and angular velocities [rad/s] the state controls hold.
+
+    Returns
+    -------
+    theta0, omega0 : ndarray, shape (n,)
+    """
     keys = control_names(n)
     return (
         np.array([controls[k].value for k in keys["theta"]], dtype=float),
@@ -173,6 +192,7 @@ def check_steps(t_end: float, dt: float) -> int:
 
 
 def column(title: str, controls: Sequence[widgets.Widget]) -> widgets.VBox:
+    """A column of controls under a bold title (one group of an instrument's panel)."""
     return widgets.VBox([widgets.HTML(f"<b>{title}</b>"), *controls])
 
 
@@ -212,3 +232,86 @@ def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumMode
     traj = simulate(model, theta0, omega0, t_end=c["t_end"].value, dt=c["dt"].value,
                     method=c["method"].value, progress=False)
     return model, traj
+
+
+def pendulum_controls(
+    model: PendulumModel,
+    theta0,
+    omega0,
+    *,
+    t_end: float,
+    dt: float,
+    method,
+    t_end_range=(0.1, 100.0),
+) -> tuple[dict, list[tuple[str, list[str]]]]:
+    """The controls of a whole pendulum run and their columns, as :func:`explore` shows them.
+
+    Initial state (:func:`state_controls`), parameters
+    (:func:`parameter_controls`) and integration (:func:`run_controls`, with
+    ``t_end`` in ``t_end_range`` [s]): the panel of the explorer and of both
+    simulators (which pass :data:`SIMULATOR_T_END`).
+
+    Returns
+    -------
+    controls : dict of str -> ipywidgets widget
+    columns : list of (title, list of control names)
+        For :class:`~pendulum_lab.widgets.Instrument`.
+    """
+    n, keys = model.n, control_names(model.n)
+    controls = {
+        **state_controls(n, theta0, omega0),
+        **parameter_controls(model),
+        **run_controls(method, t_end, dt, t_end_range=t_end_range),
+    }
+    columns = [
+        ("Initial state", keys["theta"] + keys["omega"]),
+        ("Parameters", keys["mass"] + keys["length"] + ["g"]),
+        ("Integration", ["method", "dt", "t_end"]),
+    ]
+    return controls, columns
+
+
+def build_simulator(
+    simulator_class, model, theta0, omega0, *, t_end, dt, method, speed, trail
+):
+    """Check a simulator's arguments, build it and compute its first run.
+
+    The one entry of both simulators (:func:`pendulum_lab.animation.simulator`
+    and :func:`pendulum_lab.widgets.live_simulator`).
+
+    Parameters
+    ----------
+    simulator_class : type
+        Called as ``simulator_class(model, method, t_end, dt, theta0, omega0,
+        speed, trail)``; an :class:`~pendulum_lab.widgets.Instrument`.
+    model : PendulumModel
+    theta0, omega0 : array_like, shape (n,), or None
+        As for :func:`start_state` (the default start when None).
+    t_end, dt : float
+        ``t_end`` in :data:`SIMULATOR_T_END` [s].
+    method : str
+    speed : float
+        One of :data:`SPEEDS`.
+    trail : float
+        Trail length [s], ``>= 0``.
+
+    Returns
+    -------
+    Instrument
+        The simulator, its first run computed.
+
+    Raises
+    ------
+    ValueError
+        For an argument out of range, or a first run that cannot be computed
+        (the simulator's message).
+    """
+    model = check.pendulum_model(model)
+    theta0, omega0 = start_state(model.n, theta0, omega0)
+    speed = check.choice("speed", speed, SPEEDS)
+    trail = check.non_negative_number("trail", trail)
+    t_end = check.number_in("t_end", t_end, *SIMULATOR_T_END, "s")
+    sim = simulator_class(model, method, t_end, dt, theta0, omega0, speed, trail)
+    if not sim.update():
+        raise ValueError(sim.message)
+    return sim

@@ -28,6 +28,7 @@ from .controls import (
     check_steps,
     control_names,
     parameter_controls,
+    pendulum_controls,
     run_controls,
     simulate_controls,
     slider,
@@ -65,31 +66,22 @@ class Explorer(Instrument):
     def __init__(
         self, model: PendulumModel, method, t_end: float, dt: float, theta0, omega0, plots: Sequence
     ):
-        n = model.n
-        self.panels = resolve_panels(plots, n)
-        controls = {
-            **state_controls(n, theta0, omega0),
-            **parameter_controls(model),
-            **run_controls(method, t_end, dt),
-        }
-        keys = control_names(n)
-        columns = [
-            ("Initial state", keys["theta"] + keys["omega"]),
-            ("Parameters", keys["mass"] + keys["length"] + ["g"]),
-            ("Integration", ["method", "dt", "t_end"]),
-        ]
+        self.panels = resolve_panels(plots, model.n)
+        controls, columns = pendulum_controls(
+            model, theta0, omega0, t_end=t_end, dt=dt, method=method
+        )
         self._rows, self._cols = panel_grid(len(self.panels))
         super().__init__(model, controls, columns, rows=self._rows)
 
-    def _compute(self):
+    def compute(self):
         return simulate_controls(self.model.n, self.controls)
 
-    def _redraw(self) -> None:
+    def redraw(self) -> None:
         # Building axes and their ticks is most of a redraw: on an update, keep
         # the axes and replace only what the panels draw (half the latency).
         axes = self.figure.axes
         if len(axes) != len(self.panels):
-            super()._redraw()
+            super().redraw()
             return
         for ax in axes:
             remove_data(ax)
@@ -97,7 +89,7 @@ class Explorer(Instrument):
             panel(ax, self.trajectory, self.model)
             cheap_to_redraw(ax)
 
-    def _draw(self, figure):
+    def draw(self, figure):
         for k, (_, panel) in enumerate(self.panels):
             ax = figure.add_subplot(self._rows, self._cols, k + 1)
             panel(ax, self.trajectory, self.model)
@@ -271,13 +263,13 @@ class EquilibriumExplorer(Instrument):
         """The selected :class:`~pendulum_lab.mechanics.Equilibrium`."""
         return self.model.chain.equilibrium(self.controls["equilibrium"].value)
 
-    def _compute(self):
+    def compute(self):
         def origin(model):
             return equilibrium_angles(model, self.controls["equilibrium"].value)
 
         return simulate_controls(self.model.n, self.controls, origin=origin)
 
-    def _draw(self, figure):
+    def draw(self, figure):
         left = figure.add_subplot(1, 2, 1)
         right = figure.add_subplot(1, 2, 2, sharey=left)
         plotting.plot_linear_vs_nonlinear(
@@ -285,7 +277,7 @@ class EquilibriumExplorer(Instrument):
         )
         figure.subplots_adjust(left=0.07, right=0.985, bottom=0.16, top=0.9, wspace=0.12)
 
-    def _summary(self) -> str:
+    def summary(self) -> str:
         eq = self.equilibrium
         kind = eq.classify(self.model.parameter_values)
         jac = np.array(eq.jacobian.subs(self.model.parameter_values), dtype=float)
@@ -297,7 +289,7 @@ class EquilibriumExplorer(Instrument):
                 pairs.append(text)
         return (
             f"{eq.name}: {kind}; Jacobian eigenvalues {', '.join(sorted(pairs))} (1/s). "
-            + super()._summary()
+            + super().summary()
         )
 
 
@@ -366,7 +358,7 @@ class EnergyExplorer(Instrument):
         self._cols = model.n
         super().__init__(model, controls, columns)
 
-    def _compute(self):
+    def compute(self):
         c = self.controls
         check_steps(c["t_end"].value, c["dt"].value)
         theta0 = rest_state_at_energy(self.model, c["energy"].value)
@@ -381,7 +373,7 @@ class EnergyExplorer(Instrument):
         )
         return self.model, traj
 
-    def _draw(self, figure):
+    def draw(self, figure):
         axes = [figure.add_subplot(1, self._cols, k + 1) for k in range(self._cols)]
         if self.model.n == 1:
             plotting.plot_phase_portrait(self.model, ax=axes[0], trajectory=self.trajectory)
@@ -389,11 +381,11 @@ class EnergyExplorer(Instrument):
             plotting.plot_link_projections(self.trajectory, axes=axes)
         figure.subplots_adjust(left=0.07, right=0.985, bottom=0.16, top=0.9, wspace=0.25)
 
-    def _summary(self) -> str:
+    def summary(self) -> str:
         phi = float(self.trajectory.theta[0, 0])
         return (
             f"Start at rest with every angle = {phi:.4f} rad "
-            f"({np.degrees(phi):.1f}°). " + super()._summary()
+            f"({np.degrees(phi):.1f}°). " + super().summary()
         )
 
 

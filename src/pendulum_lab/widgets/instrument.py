@@ -1,14 +1,20 @@
-"""The machinery of every instrument: controls, a status line, a figure rendered to PNG.
+"""The machinery of every instrument: controls, a status line, and how a run is shown.
 
-Rendering to an ``ipywidgets.Image`` works the same in JupyterLab, in a
-notebook run by nbval and in a test without any front end, and needs no
-interactive matplotlib backend.
+An :class:`Instrument` observes its controls, recomputes a trajectory when
+one changes, catches what cannot be simulated and says so in its status
+line, and then shows the run. By default it shows it in a matplotlib figure
+rendered to PNG into an ``ipywidgets.Image``, which works the same in
+JupyterLab, in a notebook run by nbval and in a test without any front end,
+and needs no interactive matplotlib backend. An instrument built with
+``figure=False`` has no figure and shows the run its own way (the live
+simulator of :mod:`pendulum_lab.widgets.live` sends it to the browser).
 """
 
 from __future__ import annotations
 
 import base64
 import warnings
+from collections.abc import Mapping
 
 import ipywidgets as widgets
 import matplotlib as mpl
@@ -22,20 +28,62 @@ from ..model import PendulumModel
 from ..simulate import Trajectory
 from .controls import column
 
-__all__ = ["DPI", "ROW_HEIGHT", "WIDTH", "Instrument"]
+__all__ = ["DPI", "EXPECTED_ERRORS", "ROW_HEIGHT", "WIDTH", "Instrument", "WidgetWithPicture"]
 
 DPI = 90
 ROW_HEIGHT = 3.4  # inches per row of panels
 WIDTH = 10.5  # inches
 
+#: Exceptions that mean "this combination of inputs cannot be simulated": an instrument
+#: catches them and says so in its status line instead of raising.
+EXPECTED_ERRORS = (ValueError, TypeError, ConvergenceError, FloatingPointError, OverflowError)
 
-class Instrument:
-    """Controls, a status line and a figure that :meth:`update` recomputes and redraws.
+_COLOURS = {"info": "#333", "warning": "#9a6700", "error": "#b00020"}
 
-    Subclasses implement ``_compute()`` (build the model and the trajectory
+
+class WidgetWithPicture:
+    """Displays as its ``widget``, with a still :meth:`picture` of it in the same display.
+
+    A live front end (JupyterLab) shows the widget; a page without a kernel
+    (the course website, a notebook viewer) shows the picture instead of
+    controls that would do nothing. No ``_ipython_display_``: IPython would
+    use it instead of the bundle.
+    """
+
+    widget = None
+
+    def picture(self) -> tuple[str, bytes]:
+        """A still picture of what the widget shows: ``(mime type, bytes)``."""
+        raise NotImplementedError
+
+    def _repr_mimebundle_(self, **kwargs):
+        bundle = self.widget._repr_mimebundle_(**kwargs)
+        mime, data = self.picture()
+        bundle[mime] = base64.b64encode(data).decode()
+        return bundle
+
+
+class Instrument(WidgetWithPicture):
+    """Controls, a status line and a view of the run that :meth:`update` recomputes.
+
+    Subclasses implement :meth:`compute` (build the model and the trajectory
     from the controls; raise ``ValueError`` for an invalid combination) and
-    ``_draw(figure)``. Everything else -- observing the controls, catching
-    errors, rendering the figure, the message -- lives here once.
+    either :meth:`draw` (draw the run into the figure) or, for an instrument
+    built with ``figure=False``, :meth:`show`. Everything else -- observing
+    the controls, catching errors, the message -- lives here once.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        The model before the first update.
+    controls : dict of str -> ipywidgets.ValueWidget
+        A change of any of them recomputes.
+    columns : list of (str, list of str)
+        Titles and control names of the columns of controls.
+    rows : float
+        Height of the figure in rows of panels.
+    figure : bool
+        Whether the instrument shows its run in a matplotlib figure.
 
     Attributes
     ----------
@@ -44,43 +92,54 @@ class Instrument:
         The model of the latest successful update.
     trajectory : Trajectory
         The latest successful trajectory.
-    figure : matplotlib.figure.Figure
-        The figure shown (redrawn in place).
+    figure : matplotlib.figure.Figure or None
+        The figure shown (redrawn in place); None for ``figure=False``.
     widget : ipywidgets.VBox
         Controls, status line and figure; display this.
     """
-
-    #: Exceptions that mean "this combination of inputs cannot be simulated".
-    _EXPECTED = (ValueError, TypeError, ConvergenceError, FloatingPointError, OverflowError)
 
     def __init__(
         self,
         model: PendulumModel,
         controls: dict,
         columns: list[tuple[str, list[str]]],
-        rows: int = 1,
+        rows: float = 1,
+        *,
+        figure: bool = True,
     ):
         self.model = model
         self.controls = controls
         self.trajectory: Trajectory | None = None
         self._message = ""
-        self.figure = Figure(figsize=(WIDTH, ROW_HEIGHT * rows), dpi=DPI)
-        self._canvas = FigureCanvasAgg(self.figure)
+        self._holding = False
         self._status = widgets.HTML(layout=widgets.Layout(min_height="1.6em"))
-        self._image = widgets.Image(format="png")
         boxes = [column(title, [controls[k] for k in keys]) for title, keys in columns if keys]
-        self.widget = widgets.VBox([widgets.HBox(boxes), self._status, self._image])
+        children = [widgets.HBox(boxes), self._status]
+        self.figure = self._canvas = self._image = None
+        if figure:
+            self.figure = Figure(figsize=(WIDTH, ROW_HEIGHT * rows), dpi=DPI)
+            self._canvas = FigureCanvasAgg(self.figure)
+            self._image = widgets.Image(format="png")
+            children.append(self._image)
+        self.widget = widgets.VBox(children)
         for control in controls.values():
             control.observe(self._on_change, names="value")
 
     # ---- what subclasses provide ------------------------------------------------------------
-    def _compute(self) -> tuple[PendulumModel, Trajectory]:
+    def compute(self) -> tuple[PendulumModel, Trajectory]:
+        """The model and the trajectory the controls describe (subclasses implement this).
+
+        Raises one of :data:`EXPECTED_ERRORS` for a combination that cannot be
+        simulated; :meth:`update` turns it into a message.
+        """
         raise NotImplementedError
 
-    def _draw(self, figure: Figure) -> None:
+    def draw(self, figure: Figure) -> None:
+        """Draw :attr:`trajectory` into the emptied ``figure`` (figure instruments implement it)."""
         raise NotImplementedError
 
-    def _summary(self) -> str:
+    def summary(self) -> str:
+        """The status line after a successful update: steps, method, time, energy error."""
         traj = self.trajectory
         err = float(np.max(np.abs(traj.energy_error)))
         return (
@@ -89,47 +148,93 @@ class Instrument:
             f"max |E − E(0)| = {err:.2e} J"
         )
 
+    def show(self) -> None:
+        """Show the latest trajectory: by default :meth:`redraw` the figure and :meth:`render` it.
+
+        An instrument without a figure overrides this. It may raise one of
+        :data:`EXPECTED_ERRORS`; :meth:`update` then reports it.
+        """
+        self.redraw()
+        self.render()
+
+    def redraw(self) -> None:
+        """Draw the current trajectory into an emptied figure (:meth:`draw`)."""
+        self.figure.clear()
+        self.draw(self.figure)
+
+    def render(self) -> None:
+        """Rasterise the figure and send it to the image widget as PNG."""
+        # FreeType's hinting of every glyph is a fifth of a redraw; unhinted
+        # text looks the same at this size and resolution.
+        with mpl.rc_context({"text.hinting": "none"}):
+            self._canvas.draw()
+        self._image.value = png_bytes(np.asarray(self._canvas.buffer_rgba()))
+
     # ---- the shared machinery ----------------------------------------------------------------
     @property
     def message(self) -> str:
         """The text of the status line: a summary of the run, a warning or an error."""
         return self._message
 
-    def _set_message(self, text: str, kind: str = "info") -> None:
+    def set_message(self, text: str, kind: str = "info") -> None:
+        """Show ``text`` in the status line; ``kind``: ``"info"``, ``"warning"`` or ``"error"``."""
+        if kind not in _COLOURS:
+            raise ValueError(f"`kind` must be one of {list(_COLOURS)}, got {kind!r}")
         self._message = text
-        colour = {"info": "#333", "warning": "#9a6700", "error": "#b00020"}[kind]
         escaped = text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-        self._status.value = f'<span style="color:{colour}">{escaped}</span>'
+        self._status.value = f'<span style="color:{_COLOURS[kind]}">{escaped}</span>'
+
+    def set_controls(self, values: Mapping[str, object]) -> bool:
+        """Set several controls at once and recompute once; return whether the update succeeded.
+
+        Setting them one by one would recompute after each. Unknown names
+        raise ``ValueError`` before any control changes.
+        """
+        unknown = [name for name in values if name not in self.controls]
+        if unknown:
+            raise ValueError(f"no control named {unknown}; the controls are {list(self.controls)}")
+        self._holding = True
+        try:
+            for name, value in values.items():
+                self.controls[name].value = value
+        finally:
+            self._holding = False
+        return self.update()
 
     def _on_change(self, change) -> None:
-        self.update()
+        if not self._holding:
+            self.update()
 
     def update(self) -> bool:
-        """Recompute from the controls and redraw; return whether it succeeded.
+        """Recompute from the controls and show the run; return whether it succeeded.
 
-        On an invalid combination the previous trajectory and figure stay and
+        On an invalid combination the previous trajectory and view stay and
         ``message`` says what is wrong. A run that blew up (non-finite state)
-        is drawn up to where it stopped, with the warning in ``message``.
+        is shown up to where it stopped, with the warning in ``message``.
         """
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always", RuntimeWarning)
-                model, trajectory = self._compute()
-        except self._EXPECTED as err:
+                model, trajectory = self.compute()
+        except EXPECTED_ERRORS as err:
             what = (
                 "The solver did not converge"
                 if isinstance(err, ConvergenceError)
-                else ("Cannot run this combination")
+                else "Cannot run this combination"
             )
-            self._set_message(f"{what}: {err}. The figure still shows the previous run.", "error")
+            kept = (
+                "The figure still shows the previous run."
+                if self.figure is not None
+                else "The previous run goes on."
+            )
+            self.set_message(f"{what}: {err}. {kept}", "error")
             return False
         self.model, self.trajectory = model, trajectory
         try:
-            self._redraw()
-        except self._EXPECTED as err:
-            self._set_message(f"Could not draw the figure: {err}", "error")
+            self.show()
+        except EXPECTED_ERRORS as err:
+            self.set_message(f"Could not show the run: {err}", "error")
             return False
-        self._render()
         # The driver's own warning (a blow-up) says what happened; NumPy's
         # "overflow encountered in ..." that may follow it adds nothing.
         notes = list(
@@ -140,29 +245,15 @@ class Instrument:
             )
         )
         if notes:
-            self._set_message(" ".join([*notes[:2], self._summary()]), "warning")
+            self.set_message(" ".join([*notes[:2], self.summary()]), "warning")
         else:
-            self._set_message(self._summary())
+            self.set_message(self.summary())
         return True
 
-    def _redraw(self) -> None:
-        """Draw the current trajectory into an emptied figure."""
-        self.figure.clear()
-        self._draw(self.figure)
 
-    def _render(self) -> None:
-        # FreeType's hinting of every glyph is a fifth of a redraw; unhinted
-        # text looks the same at this size and resolution.
-        with mpl.rc_context({"text.hinting": "none"}):
-            self._canvas.draw()
-        self._image.value = png_bytes(np.asarray(self._canvas.buffer_rgba()))
-
-    def _repr_mimebundle_(self, **kwargs):
-        # The widget for a live front end, and the figure as it is now for a page without a
-        # kernel (which shows the picture instead of controls that would do nothing).
-        bundle = self.widget._repr_mimebundle_(**kwargs)
-        bundle[f"image/{self._image.format}"] = base64.b64encode(self._image.value).decode()
-        return bundle
+    def picture(self) -> tuple[str, bytes]:
+        """The figure as drawn now: ``(mime type, bytes)``; one without a figure overrides this."""
+        return f"image/{self._image.format}", self._image.value
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.model!r})"

@@ -1,20 +1,20 @@
-"""Figures of notebooks 13-16 (matplotlib, no pyplot state).
+"""Figures of geometric integration, notebooks 13-16: areas, modified energies, maps, steps.
 
 Each function draws into ``ax`` (or ``axes``) when given and otherwise makes
-a new figure with :func:`pendulum_lab.plotting.new_figure`; it returns the
-Figure. The numbers drawn come from the result objects of
-:mod:`pendulum_lab.geometric`; nothing is computed here beyond grids of
+a new figure (:func:`~pendulum_lab.plotting.get_axes`,
+:func:`~pendulum_lab.plotting.get_axes_grid`); it returns the Figure. The
+numbers drawn come from the result objects of :mod:`pendulum_lab.geometric`
+and :mod:`pendulum_lab.analysis`; nothing is computed here beyond grids of
 level sets.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.axes import Axes
 from matplotlib.ticker import NullFormatter
 
-from ..plotting import new_figure
-from .standard_map import GREENE_K
+from ..geometric.standard_map import GREENE_K
+from .figures import axis_label, get_axes, get_axes_grid, subscript
 
 __all__ = [
     "plot_adaptive_energy",
@@ -32,39 +32,19 @@ __all__ = [
 ]
 
 
-def _axes(ax, **figure_kw) -> Axes:
-    if ax is None:
-        return new_figure(**figure_kw)[1]
-    if not isinstance(ax, Axes):
-        raise TypeError(f"`ax` must be a matplotlib Axes or None, got {type(ax).__name__}")
-    return ax
-
-
-def _grid_axes(axes, count, ncols, width=12.0, height=3.6, **kw):
-    if axes is None:
-        nrows = -(-count // ncols)
-        fig, grid = new_figure(nrows, ncols, width=width, height=height, **kw)
-        return fig, np.atleast_1d(grid).ravel()
-    axes = np.atleast_1d(axes).ravel()
-    if axes.size < count:
-        raise ValueError(f"`axes` must hold at least {count} Axes, got {axes.size}")
-    return axes[0].figure, axes
-
-
 def plot_level_sets(energy, theta_range, p_range, ax=None, levels=15, **contour_kw):
     """Contours of ``energy(theta, p)`` (a NumPy function) over a rectangle.
 
     ``energy`` takes arrays of shape ``(..., 1)`` for ``theta`` and ``p``.
     """
-    ax = _axes(ax)
+    ax = get_axes(ax)
     theta = np.linspace(*theta_range, 241)
     p = np.linspace(*p_range, 241)
     grid_theta, grid_p = np.meshgrid(theta, p)
     values = energy(grid_theta[..., None], grid_p[..., None])
     kw = {"colors": "0.75", "linewidths": 0.6} | contour_kw
     ax.contour(grid_theta, grid_p, values, levels=levels, **kw)
-    ax.set_xlabel(r"$\theta$ [rad]")
-    ax.set_ylabel(r"$p$ [kg m$^2$/s]")
+    ax.set(xlabel=axis_label("theta"), ylabel=axis_label("p"))
     return ax.figure
 
 
@@ -79,7 +59,7 @@ def plot_orbit_on_level_sets(run, functions, axes=None, margin=0.15):
         ``{label: f}`` with ``f(theta, p)`` NumPy functions (``H``, a truncated ``H~``).
         The level through the orbit's first state is drawn in black.
     """
-    fig, grid = _grid_axes(axes, len(functions), len(functions), height=4.0)
+    fig, grid = get_axes_grid(axes, len(functions), len(functions), height=4.0)
     theta, p = run.theta[:, 0], run.p[:, 0]
     span = np.array([np.ptp(theta), np.ptp(p)])
     lo = np.array([theta.min(), p.min()]) - margin * span
@@ -108,7 +88,7 @@ def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3):
     frames : sequence of int
         Indices of saved times to draw.
     """
-    fig, grid = _grid_axes(axes, len(results), ncols, height=3.4)
+    fig, grid = get_axes_grid(axes, len(results), ncols, height=3.4)
     for ax, result in zip(grid, results):
         loops = result.loops[list(frames)]
         lo, hi = loops.min(axis=(0, 1)), loops.max(axis=(0, 1))
@@ -129,11 +109,11 @@ def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3):
 
 def plot_area_ratio(results, ax=None, labels=None):
     """``area(t) / area(0)`` (Poincare's invariant for chains) against time, one line per run."""
-    ax = _axes(ax)
+    ax = get_axes(ax)
     labels = labels or [f"{r.method}, h = {r.dt:g}" for r in results]
     for result, label in zip(results, labels):
         ax.plot(result.t, result.ratio, marker=".", label=label)
-    ax.set_xlabel("t [s]")
+    ax.set_xlabel(axis_label("t"))
     ax.set_ylabel("area(t) / area(0)")
     ax.legend(fontsize=8)
     return ax.figure
@@ -142,15 +122,14 @@ def plot_area_ratio(results, ax=None, labels=None):
 def plot_projected_areas(result, ax=None):
     """The areas of a loop's projections on each ``(theta_i, p_i)`` plane, their sum, and the
     sum of the ``(theta_i, omega_i)`` areas, against time."""
-    ax = _axes(ax)
+    ax = get_axes(ax)
     n = result.canonical.shape[1]
     for i in range(n):
-        ax.plot(result.t, result.canonical[:, i], ls="--",
-                label=rf"$(\theta_{i + 1}, p_{i + 1})$ plane")
+        sub = subscript(i + 1)
+        ax.plot(result.t, result.canonical[:, i], ls="--", label=f"(θ{sub}, p{sub}) plane")
     ax.plot(result.t, result.invariant, color="black", lw=2, label="sum over the planes")
-    ax.plot(result.t, result.velocity.sum(axis=1), color="tab:red",
-            label=r"sum in $(\theta_i, \omega_i)$")
-    ax.set_xlabel("t [s]")
+    ax.plot(result.t, result.velocity.sum(axis=1), color="tab:red", label="sum in (θᵢ, ωᵢ)")
+    ax.set_xlabel(axis_label("t"))
     ax.set_ylabel("oriented area")
     ax.set_title(f"{result.method}, h = {result.dt:g}", fontsize=10)
     ax.legend(fontsize=8)
@@ -159,15 +138,15 @@ def plot_projected_areas(result, ax=None):
 
 def plot_modified_energy_orders(result, ax=None):
     """Errors of ``H~`` truncated after ``h^k`` against the step, log-log, slopes in the legend."""
-    ax = _axes(ax)
+    ax = get_axes(ax)
     for k, errors, slope, expected in zip(result.orders, result.errors, result.slopes,
                                           result.expected):
         name = "H" if k == 0 else rf"$\tilde H$ to $h^{k}$"
         ax.loglog(result.dts, errors, marker="o",
                   label=f"{name}: slope {slope:.2f} (theory {expected})")
     ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short decades
-    ax.set_xlabel("step h [s]")
-    ax.set_ylabel("max |error| along the orbit [J]")
+    ax.set_xlabel(axis_label("step"))
+    ax.set_ylabel("max |error| along the orbit (J)")
     ax.set_title(result.method, fontsize=10)
     ax.legend(fontsize=8)
     return ax.figure
@@ -175,13 +154,13 @@ def plot_modified_energy_orders(result, ax=None):
 
 def plot_energy_drift(result, ax=None):
     """Measured energy drift rate against the modified equation's prediction, log-log."""
-    ax = _axes(ax)
+    ax = get_axes(ax)
     ax.loglog(result.dts, np.abs(result.measured), "o", label="measured (fit over the run)")
     ax.loglog(result.dts, np.abs(result.predicted), "-",
               label=rf"predicted, $\propto h^{result.power}$")
     ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("step h [s]")
-    ax.set_ylabel("|dE/dt| [J/s]")
+    ax.set_xlabel(axis_label("step"))
+    ax.set_ylabel("|dE/dt| (J/s)")
     ax.set_title(f"{result.method}: energy drift from {result.amplitude:g} rad", fontsize=10)
     ax.legend(fontsize=8)
     return ax.figure
@@ -189,7 +168,7 @@ def plot_energy_drift(result, ax=None):
 
 def plot_error_growth(results, ax=None, labels=None):
     """Global error against time, log-log, with lines of slope 1 and 2 for reference."""
-    ax = _axes(ax, width=9.0, height=5.0)
+    ax = get_axes(ax, width=9.0, height=5.0)
     labels = labels or [f"{r.method}, h = {r.dt:g}, from {r.amplitude:g} rad" for r in results]
     for result, label in zip(results, labels):
         ax.loglog(result.t, result.error, marker=".", label=label)
@@ -197,8 +176,8 @@ def plot_error_growth(results, ax=None, labels=None):
     low = min(r.error.min() for r in results)
     ax.loglog(t, low * t / t[0], color="0.6", ls=":", label="slope 1")
     ax.loglog(t, low * (t / t[0]) ** 2, color="0.3", ls=":", label="slope 2")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("global error [rad]")
+    ax.set_xlabel(axis_label("t"))
+    ax.set_ylabel("global error (rad)")
     ax.legend(fontsize=8)
     return ax.figure
 
@@ -212,7 +191,7 @@ def plot_standard_map(portraits, axes=None, ncols=3):
         ``{K: (phi, action)}`` with arrays of shape ``(iterations + 1, orbits)``
         (from :func:`pendulum_lab.geometric.standard_map.iterate`).
     """
-    fig, grid = _grid_axes(axes, len(portraits), ncols, height=3.8)
+    fig, grid = get_axes_grid(axes, len(portraits), ncols, height=3.8)
     for ax, (k, (phi, action)) in zip(grid, portraits.items()):
         wrapped = np.mod(action + np.pi, 2 * np.pi) - np.pi
         for j in range(phi.shape[1]):
@@ -220,8 +199,7 @@ def plot_standard_map(portraits, axes=None, ncols=3):
         ax.set_xlim(0, 2 * np.pi)
         ax.set_ylim(-np.pi, np.pi)
         ax.set_title(f"K = {k:g}" + (" (> K_c)" if k > GREENE_K else ""), fontsize=10)
-        ax.set_xlabel(r"$\varphi$")
-        ax.set_ylabel("I (mod 2π)")
+        ax.set(xlabel="φ", ylabel="I (mod 2π)")
     for ax in grid[len(portraits):]:
         ax.set_visible(False)
     return fig
@@ -229,7 +207,7 @@ def plot_standard_map(portraits, axes=None, ncols=3):
 
 def plot_transport_threshold(result, ax=None):
     """Finite-time transport threshold against the number of iterations, with Greene's K_c."""
-    ax = _axes(ax)
+    ax = get_axes(ax)
     ax.semilogx(result.iterations, result.thresholds, "o-", label="smallest K with crossings")
     ax.axhline(GREENE_K, color="black", ls="--", label=f"Greene's K_c = {GREENE_K:.4f}")
     ax.set_xlabel("iterations N")
@@ -244,7 +222,7 @@ def plot_adaptive_energy(runs, ax=None, envelope=False):
     With ``envelope=True`` the largest ``|E - E0|`` so far is drawn on a
     logarithmic axis: drifts of very different sizes then share one picture.
     """
-    ax = _axes(ax)
+    ax = get_axes(ax)
     for run in runs:
         label = getattr(run, "label", None) or f"{run.method.name}, dt = {run.dt:g}"
         if envelope:
@@ -252,21 +230,21 @@ def plot_adaptive_energy(runs, ax=None, envelope=False):
                         label=label)
         else:
             ax.plot(run.t, run.energy_error, lw=0.8, label=label)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("largest |H - H(0)| so far [J]" if envelope else "H - H(0) [J]")
+    ax.set_xlabel(axis_label("t"))
+    ax.set_ylabel("largest |H - H(0)| so far (J)" if envelope else "H - H(0) (J)")
     ax.legend(fontsize=8)
     return ax.figure
 
 
 def plot_step_sizes(run, ax=None, speed=None):
     """Step sizes of an adaptive run against time, with the angular speed for comparison."""
-    ax = _axes(ax)
+    ax = get_axes(ax)
     ax.plot(run.t[:-1], run.step_sizes, color="tab:blue", lw=0.8)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("step h [s]", color="tab:blue")
+    ax.set_xlabel(axis_label("t"))
+    ax.set_ylabel(axis_label("step"), color="tab:blue")
     if speed is not None:
         twin = ax.twinx()
         twin.plot(run.t, speed, color="tab:orange", lw=0.8)
-        twin.set_ylabel(r"$|\omega|$ [rad/s]", color="tab:orange")
+        twin.set_ylabel("|ω| (rad/s)", color="tab:orange")
     ax.set_title(run.label, fontsize=10)
     return ax.figure

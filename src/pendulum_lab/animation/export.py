@@ -1,0 +1,338 @@
+"""A run's animation for places without a kernel: HTML, GIF, MP4, a still PNG.
+
+:func:`html_animation` embeds the frames in a self-contained HTML player
+(matplotlib's, the one behind
+:meth:`matplotlib.animation.Animation.to_jshtml`); :func:`save_animation`
+writes an animated GIF (Pillow) or an MP4 (the ffmpeg binary that the
+``imageio-ffmpeg`` package ships); :func:`still_frame` draws one frame. All
+draw the scene of :mod:`.scene`, blitting only the moving artists.
+"""
+
+from __future__ import annotations
+
+import base64
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from matplotlib.animation import FFMpegWriter, HTMLWriter, PillowWriter
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from PIL import Image
+
+from .. import _validation as check
+from .._png import png_bytes
+from ..model import PendulumModel
+from ..simulate import Trajectory
+from ..widgets.controls import TRAIL
+from .scene import FPS, PendulumScene, encode_frame, frame_indices
+
+__all__ = [
+    "EXPORT_SIZE",
+    "MAX_FRAMES",
+    "count_frames",
+    "html_animation",
+    "save_animation",
+    "still_frame",
+]
+
+
+#: Default cap on the frames of :func:`html_animation` (each is an embedded PNG).
+MAX_FRAMES = 300
+#: Size of the exported animations' figure [inches].
+EXPORT_SIZE = (9, 3.6)
+# matplotlib's player links its button icons from a CDN; an animation must not load anything
+# from outside (JupyterLab and the course website have the icon font already).
+_EXTERNAL_LINK = re.compile(r"<link\b[^>]*\bhref=[\"']https?://[^>]*>\s*", re.IGNORECASE)
+
+
+def _check_run(traj, model) -> None:
+    """A single trajectory and a model, or a clear error naming the argument."""
+    if not isinstance(traj, Trajectory):
+        raise TypeError(f"`traj` must be a Trajectory, got {type(traj).__name__}")
+    check.pendulum_model(model)
+
+
+def _export_scene(
+    traj, model, trail: float, dpi: float, animated: bool = True
+) -> tuple[Figure, PendulumScene]:
+    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the run's scene."""
+    figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
+    FigureCanvasAgg(figure)
+    return figure, PendulumScene(figure, model, traj, trail, animated=animated)
+
+
+class _Blitting:
+    """A movie writer whose frames are blitted by a scene (mixed into matplotlib's writers).
+
+    The stock writers save the whole figure for every frame; redrawing only
+    the moving artists over a cached background is several times faster.
+    """
+
+    def __init__(self, scene: PendulumScene, **kwargs):
+        super().__init__(**kwargs)
+        self._scene, self._background = scene, None
+
+    def _blit(self) -> memoryview:
+        """Draw the scene's current state; return the canvas's RGBA pixels."""
+        canvas = self.fig.canvas
+        if self._background is None:  # after setup(), which may adjust the size
+            canvas.draw()
+            self._background = canvas.copy_from_bbox(self.fig.bbox)
+        canvas.restore_region(self._background)
+        for artist in self._scene.artists:
+            self.fig.draw_artist(artist)
+        return canvas.buffer_rgba()
+
+
+class _BlittingHTMLWriter(_Blitting, HTMLWriter):
+    """matplotlib's HTML player, each frame an embedded image."""
+
+    def __init__(self, scene: PendulumScene, **kwargs):
+        super().__init__(scene, embed_frames=True, **kwargs)
+
+    def grab_frame(self, **savefig_kwargs):
+        self._blit()
+        frame = base64.encodebytes(encode_frame(self.fig.canvas, self.frame_format)).decode("ascii")
+        self._saved_frames.append(frame)
+
+
+class _BlittingGIFWriter(_Blitting, PillowWriter):
+    """matplotlib's Pillow writer (animated GIF)."""
+
+    def grab_frame(self, **savefig_kwargs):
+        rgba = self._blit()
+        image = Image.frombuffer("RGBA", self.frame_size, rgba, "raw", "RGBA", 0, 1)
+        self._frames.append(image.convert("RGB"))
+
+
+class _BlittingMP4Writer(_Blitting, FFMpegWriter):
+    """matplotlib's ffmpeg pipe writer (raw RGBA frames in, H.264 out)."""
+
+    def grab_frame(self, **savefig_kwargs):
+        self._proc.stdin.write(self._blit())
+
+
+def html_animation(
+    traj: Trajectory,
+    model: PendulumModel,
+    *,
+    fps: float = 15,
+    speed: float = 1.0,
+    trail: float = TRAIL,
+    dpi: float = 64,
+    max_frames: int = MAX_FRAMES,
+):
+    """A self-contained HTML/JavaScript animation of a run, for use without a kernel.
+
+    The frames (PNG, embedded in the output) show the same drawing as the
+    matplotlib :func:`~pendulum_lab.animation.simulator`, with the time and
+    energies written above the energy panel; matplotlib's player
+    (:class:`matplotlib.animation.HTMLWriter`) adds play/pause, step and speed
+    buttons and a frame slider, all running in the browser.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A single trajectory of ``model``.
+    model : PendulumModel
+    fps : float
+        Frames per second of the player, ``> 0``.
+    speed : float
+        Simulated seconds per real second, ``> 0``.
+    trail : float
+        Trail length [s].
+    dpi : float
+        Resolution of the frames; the figure is 9 x 3.6 inches.
+    max_frames : int
+        Refuse to make more frames than this (the output grows by tens of
+        kilobytes per frame): shorten the run, or raise ``speed`` or lower
+        ``fps``.
+
+    Returns
+    -------
+    IPython.display.HTML
+        Its ``data`` holds one embedded image per frame of
+        :func:`~pendulum_lab.animation.frame_indices` (count them with :func:`count_frames`).
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> sp_ = pl.simple_pendulum()
+    >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
+    >>> count_frames(html_animation(traj, sp_, fps=5).data)
+    6
+    """
+    from IPython.display import HTML
+
+    _check_run(traj, model)
+    max_frames = check.integer_at_least("max_frames", max_frames, 1)
+    frames = frame_indices(traj, fps, speed)
+    if len(frames) > max_frames:
+        raise ValueError(
+            f"the animation would have {len(frames)} frames, more than `max_frames` = "
+            f"{max_frames}; shorten the run, raise `speed` or lower `fps`"
+        )
+    figure, scene = _export_scene(traj, model, trail, dpi)
+    writer = _BlittingHTMLWriter(
+        scene, fps=fps, default_mode="loop", embed_limit=max_frames
+    )  # MB: never the binding limit
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder, "animation.html")
+        with writer.saving(figure, path, dpi):
+            for index in frames:
+                scene.show(index)
+                writer.grab_frame()
+        return HTML(_EXTERNAL_LINK.sub("", path.read_text(encoding="utf-8")))
+
+
+def count_frames(html: str) -> int:
+    """The number of embedded frames in the output of :func:`html_animation`."""
+    return len(re.findall(r"frames\[\d+\] = \"data:image/", html))
+
+
+def _ffmpeg() -> str:
+    """The ffmpeg binary shipped in the ``imageio-ffmpeg`` wheel, or a clear ImportError."""
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise ImportError(
+            "saving an MP4 needs ffmpeg, which the imageio-ffmpeg package ships: "
+            "pip install imageio-ffmpeg (or pendulum_lab[export]); a .gif needs nothing more"
+        ) from None
+    return imageio_ffmpeg.get_ffmpeg_exe()
+
+
+def save_animation(
+    traj: Trajectory,
+    model: PendulumModel,
+    path,
+    *,
+    fps: float = FPS,
+    seconds: float | None = None,
+    speed: float = 1.0,
+    trail: float = TRAIL,
+    dpi: float = 80,
+) -> Path:
+    """Write a run as an animated GIF or an MP4 video, for slides.
+
+    The frames show the drawing of :func:`~pendulum_lab.animation.simulator`
+    (chain, trail, energies, with the time and energies written above), one
+    per :func:`~pendulum_lab.animation.frame_indices`. The file type follows
+    the suffix: ``.gif`` through Pillow (matplotlib's ``PillowWriter``), ``.mp4`` (H.264) through
+    matplotlib's ``FFMpegWriter`` with the ffmpeg of ``imageio-ffmpeg``.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A single trajectory of ``model``.
+    model : PendulumModel
+    path : str or Path
+        Ends in ``.gif`` or ``.mp4``.
+    fps : float
+        Frames per second of the file, ``> 0``.
+    seconds : float, optional
+        Length of the animation [s of playing time], ``> 0``; by default the
+        whole run. Never more frames than the run has.
+    speed : float
+        Simulated seconds per second of animation.
+    trail : float
+        Trail length [s].
+    dpi : float
+        Resolution; the figure is 9 x 3.6 inches.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ImportError
+        For ``.mp4`` without ``imageio-ffmpeg``, saying how to install it.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from PIL import Image
+    >>> import pendulum_lab as pl
+    >>> sp_ = pl.simple_pendulum()
+    >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     gif = save_animation(traj, sp_, pathlib.Path(folder, "swing.gif"), fps=5, dpi=40)
+    ...     Image.open(gif).n_frames
+    6
+    """
+    from matplotlib import rc_context
+
+    _check_run(traj, model)
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"`path` must end in .gif or .mp4, got {path.name!r}")
+    frames = frame_indices(traj, fps, speed)
+    if seconds is not None:
+        seconds = check.positive_number("seconds", seconds)
+        frames = frames[: max(1, round(seconds * fps))]
+    settings = {} if suffix == ".gif" else {"animation.ffmpeg_path": _ffmpeg()}
+    figure, scene = _export_scene(traj, model, trail, dpi)
+    if suffix == ".gif":
+        writer = _BlittingGIFWriter(scene, fps=fps)
+    else:
+        writer = _BlittingMP4Writer(scene, fps=fps, codec="h264")
+    with rc_context(settings), writer.saving(figure, str(path), dpi):
+        for index in frames:
+            scene.show(index)
+            writer.grab_frame()
+    return path
+
+
+def still_frame(
+    traj: Trajectory,
+    model: PendulumModel,
+    *,
+    index: int | None = None,
+    trail: float = TRAIL,
+    dpi: float = 80,
+) -> bytes:
+    """One frame of a run's animation as a PNG: by default the last, with the whole run's energies.
+
+    The drawing of :func:`html_animation` and :func:`save_animation` (chain,
+    trail, kinetic, potential and total energy up to that state, the time
+    and energies written above), for a page that cannot play anything: the
+    browser-drawn :func:`pendulum_lab.widgets.live_simulator` shows it where
+    no kernel runs.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A single trajectory of ``model``.
+    model : PendulumModel
+    index : int, optional
+        The saved state shown, ``0 <= index < len(traj.t)``; default the last.
+    trail : float
+        Trail length [s].
+    dpi : float
+        Resolution; the figure is 9 x 3.6 inches.
+
+    Returns
+    -------
+    bytes
+        The PNG file's bytes.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> sp_ = pl.simple_pendulum()
+    >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
+    >>> still_frame(traj, sp_, dpi=40)[:8]
+    b'\\x89PNG\\r\\n\\x1a\\n'
+    """
+    _check_run(traj, model)
+    last = len(traj.t) - 1
+    index = last if index is None else check.index_below("index", index, last + 1)
+    figure, scene = _export_scene(traj, model, trail, dpi, animated=False)
+    scene.show(index)
+    figure.canvas.draw()
+    return png_bytes(np.asarray(figure.canvas.buffer_rgba()))

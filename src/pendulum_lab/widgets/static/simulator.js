@@ -1,0 +1,654 @@
+// The live pendulum simulator, drawn in the browser (anywidget front-end module).
+//
+// The kernel sends each run as float32 buffers in chunks (pendulum_lab.widgets.live.
+// run_messages); this module plays the run with requestAnimationFrame at the display's
+// frame rate, interpolating linearly between the saved states, and draws the chain with
+// a trail, energy bars, the energy-error trace and the readouts. Dragging a bob moves
+// the chain; on release the kernel is asked for the motion from there.
+// No imports, nothing from the network: the file travels inside the Python package.
+
+const WIDTH = 900;
+const HEIGHT = 340;
+const CHAIN = 340; // the chain's square panel, at the left
+const COLOURS = {
+  kinetic: "#1f77b4",
+  potential: "#ff7f0e",
+  total: "#000000",
+  trail: "#9467bd",
+  bob: "#d62728",
+  rod: "#404040",
+  grid: "#d0d0d0",
+  text: "#222222",
+  faint: "#9a9a9a",
+};
+const KEY_HELP =
+  "Space or K: play or pause. Left and right arrows: one step back or forward. " +
+  "Up and down arrows: faster or slower. Home, End: start, end. " +
+  "Drag a bob to start the motion from there.";
+
+function element(tag, className, attributes = {}) {
+  const node = document.createElement(tag);
+  if (className) node.className = className;
+  for (const [key, value] of Object.entries(attributes)) node.setAttribute(key, value);
+  return node;
+}
+
+// One run as it arrives: preallocated arrays filled chunk by chunk.
+function newRun(header) {
+  const { states, links } = header;
+  return {
+    id: header.run,
+    meta: header,
+    angles: new Float32Array(states * links),
+    energies: new Float32Array(states * 3),
+    error: new Float32Array(states),
+    lastBob: new Float32Array(states * 2), // x, y of the last bob, for the trail
+    got: new Set(),
+    available: 0, // states received without a gap from the first
+  };
+}
+
+function addChunk(run, header, buffers) {
+  if (run.got.has(header.chunk)) return;
+  const n = header.links;
+  const floats = (view) => new Float32Array(view.buffer, view.byteOffset, view.byteLength / 4);
+  run.angles.set(floats(buffers[0]), header.first * n);
+  run.energies.set(floats(buffers[1]), header.first * 3);
+  run.error.set(floats(buffers[2]), header.first);
+  const lengths = header.lengths;
+  for (let i = header.first; i < header.first + header.count; i++) {
+    let x = 0;
+    let y = 0;
+    for (let j = 0; j < n; j++) {
+      const a = run.angles[i * n + j];
+      x += lengths[j] * Math.sin(a);
+      y -= lengths[j] * Math.cos(a);
+    }
+    run.lastBob[2 * i] = x;
+    run.lastBob[2 * i + 1] = y;
+  }
+  run.got.add(header.chunk);
+  // Playable: the states up to the first chunk still missing.
+  const size = run.meta.chunk_states;
+  while (run.available < run.meta.states && run.got.has(run.available / size)) {
+    run.available = Math.min(run.meta.states, run.available + size);
+  }
+}
+
+function format(value, digits = 3) {
+  if (!Number.isFinite(value)) return String(value);
+  return value.toFixed(digits);
+}
+
+function render({ model, el }) {
+  const root = element("div", "plab-live", {
+    tabindex: "0",
+    role: "group",
+    "aria-label": "Pendulum simulator. " + KEY_HELP,
+    "data-lm-suppress-shortcuts": "true",
+  });
+  const canvas = element("canvas", "plab-live-canvas", {
+    role: "img",
+    "aria-label": "The pendulum, its energies and its energy error",
+  });
+  const bar = element("div", "plab-live-bar");
+  const back = element("button", "plab-button", { type: "button", title: "one step back (Left)" });
+  back.textContent = "◀|";
+  const play = element("button", "plab-button plab-play", { type: "button", title: "play/pause (Space)" });
+  const forward = element("button", "plab-button", { type: "button", title: "one step forward (Right)" });
+  forward.textContent = "|▶";
+  const speedBox = element("select", "plab-speed", { title: "playback speed (Up/Down)", "aria-label": "playback speed" });
+  const scrub = element("input", "plab-scrub", {
+    type: "range",
+    min: "0",
+    max: "0",
+    step: "1",
+    value: "0",
+    "aria-label": "time",
+  });
+  const clock = element("span", "plab-clock");
+  const help = element("span", "plab-help");
+  help.textContent = "drag a bob · Space play/pause · ←/→ step · ↑/↓ speed";
+  const status = element("div", "plab-status", { role: "status", "aria-live": "polite" });
+  bar.append(back, play, forward, speedBox, scrub, clock);
+  root.append(canvas, bar, help, status);
+  el.appendChild(root);
+
+  const context = canvas.getContext("2d");
+  let scale = 1; // device pixels per CSS pixel
+  function fitCanvas() {
+    scale = window.devicePixelRatio || 1;
+    canvas.width = Math.round(WIDTH * scale);
+    canvas.height = Math.round(HEIGHT * scale);
+    canvas.style.width = `${WIDTH}px`;
+    canvas.style.height = "auto"; // keeps the aspect ratio where max-width narrows it
+  }
+  fitCanvas();
+
+  // ---- state -----------------------------------------------------------------------------
+  let run = null; // the run shown
+  let incoming = null; // a newer run still arriving (shown once its first chunk is in)
+  let t = model.get("time") || 0;
+  let playing = model.get("playing");
+  let speed = model.get("speed");
+  let lastStamp = null;
+  let frames = 0;
+  let dirty = true;
+  let dragging = null; // {bob, angles, pointerId}
+  let pending = false; // a release sent, no answer yet
+  let frameId = 0;
+  let drawSeconds = 0; // time spent drawing, for data-draw-ms (the cost of one frame)
+
+  function setStatus(text, kind) {
+    status.textContent = text || "";
+    status.dataset.kind = kind || "info";
+  }
+  function showModelMessage() {
+    setStatus(model.get("message"), model.get("message_kind"));
+  }
+  showModelMessage();
+
+  function fillSpeeds() {
+    speedBox.replaceChildren();
+    for (const s of model.get("speeds")) {
+      const option = element("option", "", { value: String(s) });
+      option.textContent = `${s}×`;
+      speedBox.appendChild(option);
+    }
+    speedBox.value = String(speed);
+  }
+  fillSpeeds();
+
+  function duration() {
+    if (!run) return 0;
+    return (Math.max(run.available, 1) - 1) * run.meta.spacing;
+  }
+  function fullDuration() {
+    return run ? (run.meta.states - 1) * run.meta.spacing : 0;
+  }
+
+  function setPlaying(value, save = true) {
+    if (value && run && run.available === run.meta.states && t >= duration()) t = 0;
+    playing = value;
+    play.textContent = playing ? "❚❚ pause" : "▶ play";
+    play.setAttribute("aria-pressed", playing ? "true" : "false");
+    root.dataset.playing = playing ? "1" : "0";
+    lastStamp = null;
+    if (save && model.get("playing") !== playing) {
+      model.set("playing", playing);
+      if (!playing) model.set("time", t);
+      model.save_changes();
+    }
+    dirty = true;
+  }
+  setPlaying(playing, false);
+
+  function seek(time, save = true) {
+    t = Math.min(Math.max(time, 0), duration());
+    dirty = true;
+    if (save) {
+      model.set("time", t);
+      model.save_changes();
+    }
+  }
+
+  function stepBy(direction) {
+    if (!run) return;
+    setPlaying(false);
+    const index = Math.round(t / run.meta.spacing) + direction;
+    seek(index * run.meta.spacing);
+  }
+
+  function changeSpeed(direction) {
+    const speeds = model.get("speeds");
+    const k = speeds.indexOf(speed);
+    const next = speeds[Math.min(Math.max(k + direction, 0), speeds.length - 1)];
+    if (next !== speed) {
+      speed = next;
+      speedBox.value = String(speed);
+      model.set("speed", speed);
+      model.save_changes();
+      dirty = true;
+    }
+  }
+
+  // ---- interpolation ---------------------------------------------------------------------
+  function anglesAt(time) {
+    const n = run.meta.links;
+    const last = Math.max(run.available - 1, 0);
+    const s = Math.min(time / run.meta.spacing, last);
+    const i = Math.min(Math.floor(s), last);
+    const f = i < last ? s - i : 0;
+    const out = new Float64Array(n);
+    for (let j = 0; j < n; j++) {
+      const a = run.angles[i * n + j];
+      const b = i < last ? run.angles[(i + 1) * n + j] : a;
+      out[j] = a + f * (b - a);
+    }
+    return out;
+  }
+  function seriesAt(array, width, column, time) {
+    const last = Math.max(run.available - 1, 0);
+    const s = Math.min(time / run.meta.spacing, last);
+    const i = Math.min(Math.floor(s), last);
+    const f = i < last ? s - i : 0;
+    const a = array[i * width + column];
+    const b = i < last ? array[(i + 1) * width + column] : a;
+    return a + f * (b - a);
+  }
+
+  // ---- geometry of the chain panel -------------------------------------------------------
+  function chainScale() {
+    const reach = run ? run.meta.lengths.reduce((a, b) => a + b, 0) : 2;
+    return (CHAIN / 2 - 14) / (1.05 * reach);
+  }
+  const pivot = { x: CHAIN / 2, y: CHAIN / 2 };
+  function toCanvas(x, y, s) {
+    return [pivot.x + x * s, pivot.y - y * s];
+  }
+  function positions(angles) {
+    const lengths = run.meta.lengths;
+    const xs = [0];
+    const ys = [0];
+    for (let j = 0; j < angles.length; j++) {
+      xs.push(xs[j] + lengths[j] * Math.sin(angles[j]));
+      ys.push(ys[j] - lengths[j] * Math.cos(angles[j]));
+    }
+    return [xs, ys];
+  }
+  function bobRadius(j) {
+    const masses = run.meta.masses;
+    return 4 + 8 * Math.sqrt(masses[j] / Math.max(...masses));
+  }
+
+  // ---- drawing ---------------------------------------------------------------------------
+  function draw() {
+    const c = context;
+    c.setTransform(scale, 0, 0, scale, 0, 0);
+    c.clearRect(0, 0, WIDTH, HEIGHT);
+    c.fillStyle = "#ffffff";
+    c.fillRect(0, 0, WIDTH, HEIGHT);
+    if (!run || run.available === 0) {
+      c.fillStyle = COLOURS.faint;
+      c.font = "14px sans-serif";
+      c.fillText("waiting for the kernel…", 20, 30);
+      return;
+    }
+    const angles = dragging ? dragging.angles : anglesAt(t);
+    drawChain(c, angles);
+    drawBars(c);
+    drawError(c);
+    drawReadout(c);
+    root.dataset.time = t.toFixed(4);
+    root.dataset.theta = Array.from(angles, (a) => a.toFixed(5)).join(",");
+  }
+
+  function drawChain(c, angles) {
+    const s = chainScale();
+    root.dataset.scale = s.toFixed(6);
+    c.strokeStyle = COLOURS.grid;
+    c.lineWidth = 1;
+    c.strokeRect(0.5, 0.5, CHAIN - 1, CHAIN - 1);
+    // Trail of the last bob over the past `trail` seconds, fading out.
+    const trail = model.get("trail");
+    if (!dragging && trail > 0) {
+      const spacing = run.meta.spacing;
+      const last = Math.min(Math.floor(t / spacing), run.available - 1);
+      const first = Math.max(0, Math.ceil((t - trail) / spacing));
+      const [xs, ys] = positions(angles);
+      const segments = 8;
+      const per = Math.max(1, Math.ceil((last - first + 1) / segments));
+      c.lineWidth = 1.5;
+      for (let k = first; k <= last; k += per) {
+        const end = Math.min(k + per, last);
+        c.beginPath();
+        c.globalAlpha = 0.15 + 0.6 * ((k - first) / Math.max(last - first, 1));
+        c.strokeStyle = COLOURS.trail;
+        c.moveTo(...toCanvas(run.lastBob[2 * k], run.lastBob[2 * k + 1], s));
+        for (let i = k + 1; i <= end; i++) {
+          c.lineTo(...toCanvas(run.lastBob[2 * i], run.lastBob[2 * i + 1], s));
+        }
+        if (end === last) c.lineTo(...toCanvas(xs[xs.length - 1], ys[ys.length - 1], s));
+        c.stroke();
+      }
+      c.globalAlpha = 1;
+    }
+    const [xs, ys] = positions(angles);
+    c.strokeStyle = COLOURS.rod;
+    c.lineWidth = 3;
+    c.beginPath();
+    c.moveTo(...toCanvas(0, 0, s));
+    for (let j = 1; j < xs.length; j++) c.lineTo(...toCanvas(xs[j], ys[j], s));
+    c.stroke();
+    c.fillStyle = "#000000";
+    c.fillRect(pivot.x - 4, pivot.y - 4, 8, 8);
+    for (let j = 1; j < xs.length; j++) {
+      const [px, py] = toCanvas(xs[j], ys[j], s);
+      c.beginPath();
+      c.arc(px, py, bobRadius(j - 1), 0, 2 * Math.PI);
+      c.fillStyle = dragging && dragging.bob === j - 1 ? "#ff9896" : COLOURS.bob;
+      c.fill();
+      c.strokeStyle = "#000000";
+      c.lineWidth = 1;
+      c.stroke();
+    }
+    if (dragging || pending) {
+      c.fillStyle = COLOURS.text;
+      c.font = "12px sans-serif";
+      c.fillText(pending ? "computing the new motion…" : "release to start from here", 10, CHAIN - 10);
+    }
+  }
+
+  function drawBars(c) {
+    const left = CHAIN + 30;
+    const top = 40;
+    const bottom = HEIGHT - 40;
+    const [low, high] = run.meta.energy_range;
+    const span = Math.max(high - low, 1e-12);
+    const yOf = (e) => bottom - ((Math.min(Math.max(e, low), high) - low) / span) * (bottom - top);
+    const names = [
+      ["T", "kinetic", 0],
+      ["V", "potential", 1],
+      ["E", "total", 2],
+    ];
+    c.font = "12px sans-serif";
+    c.fillStyle = COLOURS.text;
+    c.fillText("energy (J)", left, 20);
+    c.strokeStyle = COLOURS.faint;
+    c.lineWidth = 1;
+    c.beginPath();
+    c.moveTo(left - 6, yOf(0));
+    c.lineTo(left + 170, yOf(0));
+    c.stroke();
+    names.forEach(([label, key, column], k) => {
+      const value = seriesAt(run.energies, 3, column, t);
+      const x = left + k * 56;
+      const y0 = yOf(0);
+      const y1 = yOf(value);
+      c.fillStyle = COLOURS[key];
+      c.fillRect(x, Math.min(y0, y1), 36, Math.max(Math.abs(y1 - y0), 1));
+      c.fillStyle = COLOURS.text;
+      c.fillText(label, x + 13, bottom + 16);
+      c.fillText(format(value, 2), x, bottom + 30);
+    });
+    // Dotted line at E(0): the total-energy bar should stay on it.
+    c.setLineDash([3, 3]);
+    c.strokeStyle = COLOURS.total;
+    c.beginPath();
+    c.moveTo(left + 106, yOf(run.meta.energy0));
+    c.lineTo(left + 150, yOf(run.meta.energy0));
+    c.stroke();
+    c.setLineDash([]);
+    c.fillText("E(0)", left + 152, yOf(run.meta.energy0) + 4);
+  }
+
+  function drawError(c) {
+    const left = CHAIN + 240;
+    const right = WIDTH - 16;
+    const top = 150;
+    const bottom = HEIGHT - 36;
+    const total = Math.max(fullDuration(), 1e-9);
+    const bound = Math.max(run.meta.error_max, 1e-300);
+    const xOf = (time) => left + (time / total) * (right - left);
+    const yOf = (e) => (top + bottom) / 2 - (e / bound) * ((bottom - top) / 2);
+    c.strokeStyle = COLOURS.grid;
+    c.lineWidth = 1;
+    c.strokeRect(left, top, right - left, bottom - top);
+    c.beginPath();
+    c.moveTo(left, yOf(0));
+    c.lineTo(right, yOf(0));
+    c.stroke();
+    c.fillStyle = COLOURS.text;
+    c.font = "12px sans-serif";
+    c.fillText("E − E(0) (J)", left, top - 8);
+    c.fillStyle = COLOURS.faint;
+    c.fillText(`+${bound.toExponential(1)}`, right - 58, top - 8);
+    c.fillText(`0 … ${total.toFixed(1)} s`, right - 70, bottom + 16);
+    const spacing = run.meta.spacing;
+    const now = Math.min(Math.floor(t / spacing), run.available - 1);
+    const step = Math.max(1, Math.floor(run.available / (right - left)));
+    for (const [upto, colour, width] of [
+      [run.available - 1, COLOURS.faint, 1],
+      [now, COLOURS.total, 1.5],
+    ]) {
+      c.strokeStyle = colour;
+      c.lineWidth = width;
+      c.beginPath();
+      for (let i = 0; i <= upto; i += step) {
+        const x = xOf(i * spacing);
+        const y = yOf(run.error[i]);
+        if (i === 0) c.moveTo(x, y);
+        else c.lineTo(x, y);
+      }
+      c.stroke();
+    }
+    c.strokeStyle = COLOURS.bob;
+    c.beginPath();
+    c.moveTo(xOf(t), top);
+    c.lineTo(xOf(t), bottom);
+    c.stroke();
+  }
+
+  function drawReadout(c) {
+    const meta = run.meta;
+    const step = Math.min(Math.round(t / meta.dt), meta.steps);
+    const lines = [
+      `t = ${format(t, 2)} s of ${format(fullDuration(), 1)} s`,
+      `${meta.method}, Δt = ${meta.dt} s, ${speed}× speed`,
+      `step ${step} of ${meta.steps}`,
+      `E − E(0) = ${seriesAt(run.error, 1, 0, t).toExponential(2)} J`,
+    ];
+    if (!meta.completed) lines.push("the run stopped: the state became non-finite");
+    c.fillStyle = COLOURS.text;
+    c.font = "13px monospace";
+    lines.forEach((line, k) => c.fillText(line, CHAIN + 240, 24 + 20 * k));
+  }
+
+  // ---- the animation loop ----------------------------------------------------------------
+  function tick(stamp) {
+    frameId = requestAnimationFrame(tick);
+    if (playing && run && !dragging && !pending) {
+      if (lastStamp !== null) {
+        t += ((stamp - lastStamp) / 1000) * speed;
+        const end = duration();
+        const complete = run.available === run.meta.states;
+        if (t >= end) {
+          if (complete && model.get("loop") && end > 0) t = t % end;
+          else if (complete) {
+            t = end;
+            setPlaying(false);
+          } else t = end; // wait for the next chunk
+        }
+      }
+      lastStamp = stamp;
+      dirty = true;
+    }
+    if (dirty) {
+      const started = performance.now();
+      draw();
+      drawSeconds += (performance.now() - started) / 1000;
+      dirty = false;
+      frames += 1;
+      root.dataset.frames = String(frames);
+      root.dataset.drawMs = ((1000 * drawSeconds) / frames).toFixed(3);
+      root.dataset.clock = stamp.toFixed(3);
+      if (run) {
+        scrub.value = String(Math.round(t / run.meta.spacing));
+        clock.textContent = `${format(t, 2)} s`;
+      }
+    }
+  }
+  frameId = requestAnimationFrame(tick);
+
+  // ---- messages from the kernel ----------------------------------------------------------
+  function onMessage(content, buffers) {
+    if (!content || typeof content !== "object") return;
+    if (content.type === "run") {
+      if (run && content.run < run.id) return;
+      if (run && content.run === run.id) {
+        addChunk(run, content, buffers);
+      } else {
+        if (!incoming || incoming.id !== content.run) incoming = newRun(content);
+        addChunk(incoming, content, buffers);
+        if (incoming.available > 0) {
+          run = incoming;
+          incoming = null;
+          dragging = null;
+          t = 0;
+          lastStamp = null;
+          scrub.max = String(run.meta.states - 1);
+        }
+      }
+      root.dataset.run = String(run ? run.id : -1);
+      root.dataset.states = String(run ? run.available : 0);
+      root.dataset.chunks = String(run ? run.got.size : 0);
+      dirty = true;
+    } else if (content.type === "released") {
+      pending = false;
+      dragging = null;
+      if (!content.ok) setStatus(content.message, "error");
+      lastStamp = null;
+      dirty = true;
+    }
+  }
+  const onPlaying = () => setPlaying(model.get("playing"), false);
+  const onSpeed = () => {
+    speed = model.get("speed");
+    speedBox.value = String(speed);
+    dirty = true;
+  };
+  const onTime = () => {
+    const time = model.get("time");
+    if (Math.abs(time - t) > 1e-9 && !playing) seek(time, false);
+  };
+  const onDirty = () => {
+    dirty = true;
+  };
+  const listeners = {
+    "msg:custom": onMessage,
+    "change:playing": onPlaying,
+    "change:speed": onSpeed,
+    "change:speeds": fillSpeeds,
+    "change:time": onTime,
+    "change:trail": onDirty,
+    "change:message": showModelMessage,
+    "change:message_kind": showModelMessage,
+  };
+  for (const [name, listener] of Object.entries(listeners)) model.on(name, listener);
+
+  // ---- controls --------------------------------------------------------------------------
+  play.addEventListener("click", () => setPlaying(!playing));
+  back.addEventListener("click", () => stepBy(-1));
+  forward.addEventListener("click", () => stepBy(1));
+  speedBox.addEventListener("change", () => {
+    speed = Number(speedBox.value);
+    model.set("speed", speed);
+    model.save_changes();
+    dirty = true;
+  });
+  scrub.addEventListener("input", () => {
+    if (!run) return;
+    setPlaying(false);
+    seek(Number(scrub.value) * run.meta.spacing);
+  });
+
+  root.addEventListener("keydown", (event) => {
+    const tag = event.target.tagName;
+    const native = tag === "INPUT" || tag === "SELECT" || (tag === "BUTTON" && (event.key === " " || event.key === "Enter"));
+    if (native) {
+      event.stopPropagation(); // the control handles it; JupyterLab must not
+      return;
+    }
+    const actions = {
+      " ": () => setPlaying(!playing),
+      k: () => setPlaying(!playing),
+      K: () => setPlaying(!playing),
+      ArrowRight: () => stepBy(1),
+      ".": () => stepBy(1),
+      ArrowLeft: () => stepBy(-1),
+      ",": () => stepBy(-1),
+      ArrowUp: () => changeSpeed(1),
+      "+": () => changeSpeed(1),
+      "=": () => changeSpeed(1),
+      ArrowDown: () => changeSpeed(-1),
+      "-": () => changeSpeed(-1),
+      Home: () => {
+        setPlaying(false);
+        seek(0);
+      },
+      End: () => {
+        setPlaying(false);
+        seek(duration());
+      },
+    };
+    const action = actions[event.key];
+    if (!action) return;
+    event.preventDefault();
+    event.stopPropagation();
+    action();
+  });
+
+  // ---- dragging a bob --------------------------------------------------------------------
+  function pointerMetres(event) {
+    const rect = canvas.getBoundingClientRect();
+    const px = ((event.clientX - rect.left) * WIDTH) / rect.width;
+    const py = ((event.clientY - rect.top) * HEIGHT) / rect.height;
+    const s = chainScale();
+    return [(px - pivot.x) / s, -(py - pivot.y) / s, px, py];
+  }
+  canvas.addEventListener("pointerdown", (event) => {
+    if (!run || pending || event.button > 0) return;
+    const [, , px, py] = pointerMetres(event);
+    const angles = anglesAt(t);
+    const [xs, ys] = positions(angles);
+    const s = chainScale();
+    let best = -1;
+    let bestDistance = Infinity;
+    for (let j = 1; j < xs.length; j++) {
+      const [bx, by] = toCanvas(xs[j], ys[j], s);
+      const d = Math.hypot(px - bx, py - by);
+      if (d <= bobRadius(j - 1) + 10 && d < bestDistance) {
+        best = j - 1;
+        bestDistance = d;
+      }
+    }
+    root.focus({ preventScroll: true });
+    if (best < 0) return;
+    event.preventDefault();
+    canvas.setPointerCapture(event.pointerId);
+    dragging = { bob: best, angles, pointerId: event.pointerId };
+    root.dataset.dragging = String(best);
+    dirty = true;
+  });
+  canvas.addEventListener("pointermove", (event) => {
+    if (!dragging || event.pointerId !== dragging.pointerId) return;
+    const [x, y] = pointerMetres(event);
+    const [xs, ys] = positions(dragging.angles);
+    const k = dragging.bob;
+    const angle = Math.atan2(x - xs[k], -(y - ys[k]));
+    if (Number.isFinite(angle)) dragging.angles[k] = angle;
+    dirty = true;
+  });
+  canvas.addEventListener("pointerup", (event) => {
+    if (!dragging || event.pointerId !== dragging.pointerId) return;
+    const [x, y] = pointerMetres(event);
+    pending = true;
+    delete root.dataset.dragging;
+    root.dataset.release = `${x},${y}`;
+    model.send({ type: "release", bob: dragging.bob, x, y, theta: Array.from(dragging.angles) });
+    dirty = true;
+  });
+  canvas.addEventListener("pointercancel", () => {
+    dragging = null;
+    delete root.dataset.dragging;
+    dirty = true;
+  });
+
+  model.send({ type: "ready" });
+  return () => {
+    cancelAnimationFrame(frameId);
+    for (const [name, listener] of Object.entries(listeners)) model.off(name, listener);
+  };
+}
+
+export default { render };

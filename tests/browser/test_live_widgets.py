@@ -1,0 +1,312 @@
+"""The browser-drawn widgets of ``pendulum_lab.widgets`` in a real JupyterLab in Chromium.
+
+The demo notebook ``live_demo/live_widgets.ipynb`` shows the live simulator,
+the clickable Poincare section and the clickable phase portrait. The harness
+of ``lab_harness.py`` serves that folder (``PENDULUM_LAB_NOTEBOOKS``) and runs
+all cells; then the tests play, drag, press keys and click as a student
+would, and read what the widgets report in their ``data-*`` attributes and
+in the ipywidgets sliders (which the kernel sets). Every request the page
+makes is recorded: none may leave the local server.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from pathlib import Path
+
+import pytest
+from lab_harness import SCREENSHOTS, NotebookRunner
+
+pytestmark = pytest.mark.browser
+
+DEMO = Path(__file__).resolve().parent / "live_demo"
+NOTEBOOK = "live_widgets.ipynb"
+SIM, CLICK = ".plab-live", ".plab-click"
+PIVOT = (170.0, 170.0)  # CSS pixels of the pivot in the simulator's canvas (simulator.js)
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    """One JupyterLab on the demo folder, its page after "run all", and the requests seen."""
+    runner = NotebookRunner(lambda: tmp_path_factory.mktemp("live-lab"))
+    previous = os.environ.get("PENDULUM_LAB_NOTEBOOKS")
+    os.environ["PENDULUM_LAB_NOTEBOOKS"] = str(DEMO)
+    requests: list[str] = []
+    try:
+        runner.start()
+        runner.context.on("request", lambda request: requests.append(request.url))
+        run = runner.get(NOTEBOOK)
+        yield runner, run, requests
+    finally:
+        if previous is None:
+            os.environ.pop("PENDULUM_LAB_NOTEBOOKS", None)
+        else:
+            os.environ["PENDULUM_LAB_NOTEBOOKS"] = previous
+        runner.close()
+
+
+@pytest.fixture(scope="module")
+def page(lab):
+    _, run, _ = lab
+    if not run.ok:
+        pytest.fail(f"run-all of the demo notebook failed:\n{run.report()}", pytrace=False)
+    run.page.wait_for_function(
+        f"() => document.querySelector('{SIM}') && document.querySelector('{SIM}').dataset.states"
+        " === '6001'",
+        timeout=60_000,
+    )
+    return run.page
+
+
+def data(page, selector: str, index: int = 0) -> dict:
+    return page.evaluate(
+        "([s, k]) => ({...document.querySelectorAll(s)[k].dataset})", [selector, index]
+    )
+
+
+def wait_data(page, selector, key, predicate: str, index: int = 0, timeout: float = 30_000):
+    """Wait until ``predicate`` (JavaScript over ``v``, the attribute's text) holds."""
+    page.wait_for_function(
+        f"([s, k, key]) => {{ const el = document.querySelectorAll(s)[k];"
+        f" const v = el && el.dataset[key]; return v !== undefined && ({predicate}); }}",
+        arg=[selector, index, key],
+        timeout=timeout,
+    )
+
+
+def slider_readouts(page, selector: str) -> dict[str, str]:
+    """Description -> value box text of the sliders in the cell that shows ``selector`` (with
+    ASCII minus signs: the value boxes show U+2212)."""
+    readouts = page.evaluate(
+        """(s) => {
+            const cell = document.querySelector(s).closest('.jp-Cell');
+            const out = {};
+            for (const slider of cell.querySelectorAll('.widget-slider')) {
+                const label = slider.querySelector('.widget-label');
+                const readout = slider.querySelector('.widget-readout');
+                if (label && readout) out[label.textContent.trim()] = readout.textContent.trim();
+            }
+            return out;
+        }""",
+        selector,
+    )
+    return {label: text.replace("\u2212", "-") for label, text in readouts.items()}
+
+
+def canvas_origin(page, selector: str, canvas: str) -> tuple[float, float]:
+    box = page.locator(f"{selector} {canvas}").first.bounding_box()
+    return box["x"], box["y"]
+
+
+def press(page, selector: str, *keys: str) -> None:
+    page.evaluate("(s) => document.querySelector(s).focus()", selector)
+    for key in keys:
+        page.keyboard.press(key)
+
+
+def test_the_demo_runs_cleanly(lab, page):
+    _, run, _ = lab
+    assert page.locator(SIM).count() == 1 and page.locator(CLICK).count() == 2
+    # 60 s at 10 ms: 6001 states, sent in two chunks of at most 4096.
+    assert data(page, SIM)["chunks"] == "2"
+    page.locator(SIM).first.scroll_into_view_if_needed()
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    page.locator(SIM).first.screenshot(path=str(SCREENSHOTS / "live_simulator.png"))
+    assert not run.console_errors, run.console_errors
+
+
+def test_play_advances_frames_at_the_playback_speed(page):
+    press(page, SIM, "Home")  # paused at t = 0, far from the end of the 60 s run
+    press(page, SIM, "Space")
+    wait_data(page, SIM, "playing", "v === '1'")
+    first = data(page, SIM)
+    page.wait_for_timeout(1500)
+    second = data(page, SIM)
+    frames = int(second["frames"]) - int(first["frames"])
+    seconds = (float(second["clock"]) - float(first["clock"])) / 1000
+    advanced = float(second["time"]) - float(first["time"])
+    print(f"{frames} frames in {seconds:.3f} s: {frames / seconds:.1f} frames per second")
+    assert frames > 10, "the animation did not advance"
+    # Playback maps the display's clock to simulated time at `speed` (1x here) ...
+    assert advanced == pytest.approx(seconds, abs=2e-3)
+    # ... and at 2x twice as fast (negative control of the check above).
+    press(page, SIM, "ArrowUp")
+    wait_data(page, SIM, "time", "true")
+    page.wait_for_timeout(200)
+    first = data(page, SIM)
+    page.wait_for_timeout(1000)
+    second = data(page, SIM)
+    seconds = (float(second["clock"]) - float(first["clock"])) / 1000
+    advanced = float(second["time"]) - float(first["time"])
+    assert advanced == pytest.approx(2 * seconds, abs=4e-3)
+    assert advanced != pytest.approx(seconds, abs=0.1)
+    press(page, SIM, "ArrowDown")
+
+
+def test_keyboard_steps_and_changes_speed(page):
+    active_cell = "() => window.jupyterapp.shell.currentWidget.content.activeCellIndex"
+    cell_before = page.evaluate(active_cell)
+    press(page, SIM, "Home")
+    wait_data(page, SIM, "playing", "v === '0'")
+    wait_data(page, SIM, "time", "Number(v) === 0")
+    press(page, SIM, "ArrowRight", "ArrowRight", "ArrowRight")
+    wait_data(page, SIM, "time", "Math.abs(Number(v) - 0.03) < 1e-6")
+    press(page, SIM, "ArrowLeft")
+    wait_data(page, SIM, "time", "Math.abs(Number(v) - 0.02) < 1e-6")
+    speed = page.locator(f"{SIM} .plab-speed").first
+    assert speed.input_value() == "1"
+    press(page, SIM, "ArrowUp")
+    assert speed.input_value() == "2"
+    press(page, SIM, "ArrowDown", "ArrowDown")
+    assert speed.input_value() == "0.5"
+    press(page, SIM, "ArrowUp")
+    press(page, SIM, "End")
+    wait_data(page, SIM, "time", "Math.abs(Number(v) - 60) < 1e-6")
+    press(page, SIM, "k")
+    wait_data(page, SIM, "playing", "v === '1'")  # from the end, play starts again at 0
+    press(page, SIM, "k")
+    wait_data(page, SIM, "playing", "v === '0'")
+    # The keys went to the widget, not to JupyterLab ("k" selects the cell above).
+    assert page.evaluate(active_cell) == cell_before
+
+
+def drag_bob(page, bob: int, to: tuple[float, float]) -> float:
+    """Drag bob ``bob`` (0-based) of the paused simulator to canvas pixel ``to``; return the
+    angle from the arm's joint to the release point the widget reported (``data-release``, in
+    metres, y up), which must lie under the pointer."""
+    state = data(page, SIM)
+    scale = float(state["scale"])
+    theta = [float(v) for v in state["theta"].split(",")]
+    x0, y0 = canvas_origin(page, SIM, "canvas")
+    joint = [0.0, 0.0]  # metres, y up
+    for j in range(bob):
+        joint = [joint[0] + math.sin(theta[j]), joint[1] - math.cos(theta[j])]
+    bob_at = (joint[0] + math.sin(theta[bob]), joint[1] - math.cos(theta[bob]))
+    start = (PIVOT[0] + scale * bob_at[0], PIVOT[1] - scale * bob_at[1])
+    page.mouse.move(x0 + start[0], y0 + start[1])
+    page.mouse.down()
+    for k in range(1, 6):
+        f = k / 5
+        page.mouse.move(
+            x0 + start[0] + f * (to[0] - start[0]), y0 + start[1] + f * (to[1] - start[1])
+        )
+    page.mouse.up()
+    wait_data(page, SIM, "release", "true")
+    x, y = (float(v) for v in data(page, SIM)["release"].split(","))
+    pointer = (PIVOT[0] + scale * x, PIVOT[1] - scale * y)
+    assert math.dist(pointer, to) < 1.0, (pointer, to)  # the widget read the pointer right
+    return math.atan2(x - joint[0], -(y - joint[1]))
+
+
+def test_dragging_a_bob_restarts_the_motion_from_there(page):
+    press(page, SIM, "Home")
+    wait_data(page, SIM, "playing", "v === '0'")
+    run_before = int(data(page, SIM)["run"])
+    before = slider_readouts(page, SIM)
+    # The first bob to the right of the pivot and a little up.
+    expected = drag_bob(page, 0, (PIVOT[0] + 60.0, PIVOT[1] - 20.0))
+    assert expected == pytest.approx(math.atan2(60, -20), abs=0.02)  # from the downward vertical
+    wait_data(page, SIM, "run", f"Number(v) === {run_before + 1}")
+    wait_data(page, SIM, "states", "v === '6001'")
+    after = slider_readouts(page, SIM)
+    assert after["θ₁ (rad)"] != before["θ₁ (rad)"]
+    assert after["θ₁ (rad)"] == f"{expected:.3f}"
+    assert float(after["ω₁ (rad/s)"]) == 0.0 and float(after["ω₂ (rad/s)"]) == 0.0
+    # The new run starts where the bob was released, the second arm unchanged.
+    press(page, SIM, "Home")
+    wait_data(page, SIM, "time", "Number(v) === 0")
+    theta = [float(v) for v in data(page, SIM)["theta"].split(",")]
+    assert theta[0] == pytest.approx(expected, abs=1e-5)
+    assert after["θ₂ (rad)"] == before["θ₂ (rad)"]
+
+
+def test_a_drag_beyond_the_chain_is_clamped(page):
+    press(page, SIM, "Home")
+    wait_data(page, SIM, "playing", "v === '0'")
+    run_before = int(data(page, SIM)["run"])
+    x0, _ = canvas_origin(page, SIM, "canvas")
+    # Far outside the canvas to the left: the second arm points that way; no error.
+    expected = drag_bob(page, 1, (-x0 + 5.0, PIVOT[1] + 40.0))
+    wait_data(page, SIM, "run", f"Number(v) === {run_before + 1}")
+    after = slider_readouts(page, SIM)
+    assert after["θ₂ (rad)"] == f"{expected:.3f}"
+    status = page.locator(f"{SIM} .plab-status").first
+    assert status.get_attribute("data-kind") != "error", status.text_content()
+
+
+def frame_pixel(page, index: int, x: float, y: float) -> tuple[float, float]:
+    """Page pixel of the data point ``(x, y)`` of clickable plot ``index``."""
+    frame = json.loads(data(page, CLICK, index)["frame"])
+    (left, top, right, bottom), (w, h) = frame["box"], frame["size"]
+    u = (x - frame["xlim"][0]) / (frame["xlim"][1] - frame["xlim"][0])
+    v = (y - frame["ylim"][0]) / (frame["ylim"][1] - frame["ylim"][0])
+    page.locator(CLICK).nth(index).scroll_into_view_if_needed()
+    box = page.locator(f"{CLICK} canvas").nth(index).bounding_box()
+    return box["x"] + (left + u * (right - left)) * w, box["y"] + (bottom - v * (bottom - top)) * h
+
+
+def test_clicking_the_section_launches_an_orbit(page):
+    section = 0
+    assert data(page, CLICK, section)["orbits"] == "0"
+    page.mouse.click(*frame_pixel(page, section, 0.5, 0.0))
+    wait_data(page, CLICK, "orbits", "v === '1'", section)
+    wait_data(page, CLICK, "pending", "v === '0'", section)
+    points = int(data(page, CLICK, section)["points"])
+    assert points > 5  # the clicked point and its crossings
+    page.mouse.click(*frame_pixel(page, section, -0.3, 2.0))
+    wait_data(page, CLICK, "orbits", "v === '2'", section)
+    assert int(data(page, CLICK, section)["points"]) > points
+    page.locator(CLICK).nth(section).screenshot(path=str(SCREENSHOTS / "live_section.png"))
+    # In the grey region no orbit of this energy exists: a message, the picture unchanged.
+    before = data(page, CLICK, section)
+    page.mouse.click(*frame_pixel(page, section, 3.0, 5.0))
+    wait_data(page, CLICK, "pending", "v === '0'", section)
+    status = page.locator(f"{CLICK} .plab-status").nth(section)
+    status_text = status.text_content()
+    assert "No orbit launched" in status_text and "grey region" in status_text
+    assert status.get_attribute("data-kind") == "error"
+    assert data(page, CLICK, section)["points"] == before["points"]
+    # Undo from the keyboard, then the Undo button of the controls.
+    press_in(page, section, "u")
+    wait_data(page, CLICK, "orbits", "v === '1'", section)
+    cell = (
+        page.locator(CLICK).nth(section).locator("xpath=ancestor::div[contains(@class,'jp-Cell')]")
+    )
+    cell.locator("button", has_text="Undo").click()
+    wait_data(page, CLICK, "orbits", "v === '0'", section)
+
+
+def press_in(page, index: int, key: str) -> None:
+    page.evaluate("(k) => document.querySelectorAll('.plab-click')[k].focus()", index)
+    page.keyboard.press(key)
+
+
+def test_clicking_the_portrait_launches_an_orbit_and_widens_the_window(page):
+    portrait = 1
+    ylim = json.loads(data(page, CLICK, portrait)["frame"])["ylim"]
+    page.mouse.click(*frame_pixel(page, portrait, -3.0, -9.0))
+    wait_data(page, CLICK, "orbits", "v === '1'", portrait)
+    wait_data(page, CLICK, "pending", "v === '0'", portrait)
+    widened = json.loads(data(page, CLICK, portrait)["frame"])["ylim"]
+    # A rotation from (-3, -9) reaches |omega| = sqrt(81 + 2 g (1 - cos 3)) = 10.96 rad/s at
+    # the bottom, beyond the first window (+-10.02 rad/s): the window grew to hold it.
+    assert ylim[1] == pytest.approx(10.02, abs=0.01)
+    assert widened[1] > 11.0
+    # The keyboard launches too: Enter at the cross-hair (the centre at first).
+    press_in(page, portrait, "ArrowRight")
+    page.keyboard.press("Enter")
+    wait_data(page, CLICK, "orbits", "v === '2'", portrait)
+    page.locator(CLICK).nth(portrait).screenshot(path=str(SCREENSHOTS / "live_portrait.png"))
+
+
+def test_no_console_errors_and_no_request_outside_the_local_server(lab, page):
+    runner, run, requests = lab
+    time.sleep(0.5)
+    assert requests, "no request was recorded: the check would prove nothing"
+    local = runner.server.url
+    outside = [u for u in requests if not u.startswith((local, "blob:", "data:"))]
+    assert not outside, outside[:10]
+    assert not run.console_errors, run.console_errors
