@@ -15,6 +15,7 @@ import pytest
 
 import pendulum_lab as pl
 from pendulum_lab import chaos, segments
+from pendulum_lab.chaos.bifurcation import bifurcation_samples
 from pendulum_lab.cluster import check_client, map_members
 from pendulum_lab.integrators import Method, get_method
 
@@ -86,3 +87,42 @@ def test_bad_clients_and_unregistered_methods_are_refused(client):
     with pytest.raises(ValueError, match="registered method"):
         chaos.flip_time_map(DP, size=4, t_end=0.1, method=homemade, client=client)
     assert chaos.flip_time_map(DP, size=4, t_end=0.1, method=homemade).time.shape == (4, 4)
+
+
+def test_bifurcation_diagram_on_the_cluster_is_the_local_diagram(client, monkeypatch):
+    # Little memory per segment: the whole batch and a chunk of it would then run in
+    # segments of different lengths, and a driven model's time at a step is rounded
+    # from its segment's start; the chunks must run in the whole batch's segments.
+    monkeypatch.setattr(segments, "SEGMENT_FLOATS", 1000)
+    model = pl.driven_pendulum()
+    values = np.linspace(0.9, 1.5, 7)
+    starts = dict(theta0=[[0.2], [1.0]], omega0=[[0.0], [0.0]], n_periods=32,
+                  transient_periods=40, steps_per_period=20)
+    local = chaos.bifurcation_diagram(model, "drive_amplitude", values, **starts)
+    remote = chaos.bifurcation_diagram(model, "drive_amplitude", values, **starts,
+                                       client=client, chunk_size=3)
+    for name in ("theta", "omega", "periods", "turns"):
+        assert np.array_equal(getattr(remote, name), getattr(local, name)), name
+    assert len(set(local.periods.ravel().tolist())) > 1  # not a trivial diagram
+    # Negative control: a chunk in segments of its own size is not the same to the bit.
+    family = model.family(drive_amplitude=values)
+    rows = np.arange(3)
+    own = segments.default_segment_steps(1, 2 * len(rows), 72 * 20, 20)
+    whole = segments.default_segment_steps(1, 2 * len(values), 72 * 20, 20)
+    assert own != whole
+    theta, _, _ = bifurcation_samples(rows, family, np.ones(7), np.array([[0.2], [1.0]]),
+                                      np.zeros((2, 1)), 32, 40, 20, "rk4", own)
+    assert not np.array_equal(np.moveaxis(theta, 0, 1), local.theta[:, :3])
+
+
+def test_lyapunov_map_of_a_family_on_the_cluster_is_the_local_map(client):
+    family = pl.driven_pendulum().family(drive_amplitude=[0.9, 1.2, 1.5])
+    theta0, omega0 = np.full((2, 3, 1), 0.2), np.zeros((2, 3, 1))
+    theta0[1] = 1.0
+    local = chaos.lyapunov_benettin(family, theta0, omega0, t_end=4.0, method="rk4")
+    remote = chaos.lyapunov_benettin(family, theta0, omega0, t_end=4.0, method="rk4",
+                                     client=client, chunk_size=4)
+    assert np.array_equal(remote.running, local.running)
+    # Negative control: one amplitude for all gives other estimates.
+    single = chaos.lyapunov_benettin(family.member(0), theta0, omega0, t_end=4.0, method="rk4")
+    assert not np.array_equal(single.running, local.running)

@@ -2,15 +2,19 @@
 
 The ensemble measurements (:func:`~pendulum_lab.chaos.flip_time_map`,
 :func:`~pendulum_lab.chaos.lyapunov_benettin` over a grid of initial states,
-bifurcation diagrams) take one keyword, ``client``: a
+:func:`~pendulum_lab.chaos.bifurcation_diagram`) take one keyword, ``client``: a
 ``dask.distributed.Client``. Without it the whole batch is one chunk,
 computed in this process (its members in parallel threads, as
 :func:`~pendulum_lab.simulate` does). With it the batch is cut into
 contiguous chunks that the cluster's workers compute with the same function
 and the same compiled kernels, and the results come back in order. Members
 of an ensemble never interact (every member is integrated on its own, with
-the same steps), so the result is the local one bit for bit; the tests check
-that on a ``LocalCluster``.
+the same steps), so the result is the local one bit for bit, provided a
+chunk runs in the segments the whole batch would (a driven model's time at a
+step is rounded from its segment's start; see
+:func:`~pendulum_lab.segments.default_segment_steps`) and a family's chunk
+keeps its own members (:func:`members_of`). The tests check all of this on
+a ``LocalCluster``.
 
 A model travels to the workers as its constructor call (it pickles small);
 each worker builds its own numeric functions and loads the compiled kernels

@@ -487,6 +487,13 @@ class Chain:
         return [self._equilibrium(ups) for ups in itertools.product((False, True), repeat=self.n)]
 
     def _equilibrium(self, ups: tuple) -> Equilibrium:
+        """The equilibrium with link ``i`` up where ``ups[i]``, built once per chain."""
+        found = self.__dict__.setdefault("_equilibria_found", {})
+        if ups not in found:
+            found[ups] = self._build_equilibrium(ups)
+        return found[ups]
+
+    def _build_equilibrium(self, ups: tuple) -> Equilibrium:
         """The equilibrium with link ``i`` up where ``ups[i]``: ``M^-1 dF/dq`` in closed form.
 
         There ``M = S Lambda B Lambda S`` with ``S = diag(cos theta_i) = diag(+-1)``,
@@ -531,10 +538,9 @@ class Chain:
         words = name.split("-") if isinstance(name, str) else []
         if len(words) != self.n or not set(words) <= {"down", "up"}:
             example = "-".join(["down"] * self.n)
-            raise ValueError(f"`equilibrium` must name each of the {self.n} links 'down' or "
-                             f"'up', joined by '-' (such as {example!r}), got {name!r}")
-        if "equilibria" in self.__dict__:
-            return next(eq for eq in self.equilibria if eq.name == name)
+            raise ValueError(f"`equilibrium` must be one of the 2**{self.n} names that call each "
+                             f"of the {self.n} links 'down' or 'up', joined by '-' (such as "
+                             f"{example!r}), got {name!r}")
         return self._equilibrium(tuple(word == "up" for word in words))
 
     def jacobian(self) -> sp.Matrix:
