@@ -38,8 +38,8 @@ def bench_distributed(cfg: Config) -> Section:
     with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        # every worker loads the kernels before the timing
-        chaos.flip_time_map(dp, size=20, t_end=0.1, client=client, chunk_size=8, progress=False)
+        # Every worker imports the package and loads the kernels before the timing.
+        client.run(chaos.flip_time_map, dp, size=6, t_end=0.1, progress=False)
         before = client.run(time.process_time)
         remote_sample, remote = timed(chaos.flip_time_map, dp, size=size, t_end=t_end,
                                       client=client, progress=False)
