@@ -103,6 +103,15 @@ class Config:
     peer_rounds: int = 3
     pyhamsys_t_end: float = 100.0  # item 12
     pyhamsys_step: float = 0.01
+    chain_rounds: int = 3  # item 13: long chains
+    chain_first_use: tuple = (10, 20, 50)
+    chain_printed: tuple = (3, 4, 5)
+    chain_evaluations: int = 200_000
+    chain_sizes: tuple = (3, 5, 10, 20, 50, 100, 200)
+    chain_step_budget: int = 20_000  # steps x links per timed run
+    cluster_size: int = 1000  # item 14: flip-time map on a Dask LocalCluster
+    cluster_t_end: float = 10.0
+    cluster_workers: int = 2
 
 
 FULL = Config("full")
@@ -141,6 +150,14 @@ QUICK = replace(
     peer_long_t_end=300.0,
     peer_rounds=1,
     pyhamsys_t_end=10.0,
+    chain_rounds=1,
+    chain_first_use=(20,),
+    chain_printed=(3,),
+    chain_evaluations=20_000,
+    chain_sizes=(3, 10, 50),
+    chain_step_budget=5_000,
+    cluster_size=150,
+    cluster_t_end=5.0,
 )
 SMOKE = replace(
     FULL,
@@ -191,6 +208,14 @@ SMOKE = replace(
     peer_rounds=1,
     pyhamsys_t_end=0.5,
     pyhamsys_step=0.05,
+    chain_rounds=1,
+    chain_first_use=(10,),
+    chain_printed=(3,),
+    chain_evaluations=100,
+    chain_sizes=(3, 10, 20),
+    chain_step_budget=200,
+    cluster_size=8,
+    cluster_t_end=0.5,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

@@ -1,4 +1,4 @@
-"""The benchmark suite (issue 7; items 7, 8, 9 from issues 12, 13, 16), each a ratio side by side.
+"""The benchmark suite (issue 7; items 7-11 from issues 12, 13, 16, 17): ratios side by side.
 
 One file per item (``item_slider.py`` ... ``item_live.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
@@ -32,9 +32,11 @@ from harness import (
 )
 from item_bifurcation import bench_bifurcation
 from item_c_limit import bench_c_limit
+from item_distributed import bench_distributed
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
 from item_live import bench_live
+from item_long_chains import bench_long_chains
 from item_long_run import bench_long_run
 from item_peers import bench_heyoka, bench_pyhamsys
 from item_per_eval import bench_per_eval
@@ -74,6 +76,8 @@ ITEMS = {
     "per_eval": (10, bench_per_eval, True),
     "heyoka": (11, bench_heyoka, False),
     "pyhamsys": (12, bench_pyhamsys, False),
+    "long_chains": (13, bench_long_chains, False),
+    "distributed": (14, bench_distributed, False),
 }
 
 

@@ -32,6 +32,7 @@ import ctypes.util
 import functools
 import hashlib
 import importlib.util
+import inspect
 import math
 import os
 import sys
@@ -50,6 +51,7 @@ from numba.extending import intrinsic
 from ._signatures import VECTOR
 from .discrete_mechanics import DiscreteLagrangian, discrete_lagrangian
 from .mechanics import Chain, derive_chain
+from .model import UNROLLED_MAX_LINKS
 
 __all__ = [
     "discrete_kernel_source",
@@ -57,6 +59,7 @@ __all__ = [
     "load_discrete_kernels",
     "load_generated",
     "load_kernels",
+    "looped_kernels",
     "paired_trig",
     "parameters_array",
     "sincos",
@@ -307,7 +310,7 @@ def _write_if_changed(path: Path, text: str) -> None:
 
 
 @functools.cache
-def load_kernels(n: int, forced: bool = False) -> SimpleNamespace:
+def load_kernels(n: int, forced: bool = False, looped: bool | None = None) -> SimpleNamespace:
     """Compile (or load from the disk cache) the kernels for ``n`` links.
 
     ``forced`` selects the chain with damping and drive (see
@@ -315,7 +318,12 @@ def load_kernels(n: int, forced: bool = False) -> SimpleNamespace:
     ``hamilton``, ``acceleration``, ``source``, ``path`` and ``module`` (the
     name the generated module is imported under, which also defines
     ``COORDINATES = n``).
+    ``looped``: whether to take :func:`looped_kernels` instead of generating
+    them from the expressions; by default for chains longer than
+    ``UNROLLED_MAX_LINKS`` (tests and benchmarks compare the two).
     """
+    if looped if looped is not None else n > UNROLLED_MAX_LINKS:
+        return looped_kernels()
     source = kernel_source(derive_chain(n, forced))
     module, path = load_generated(f"chain{n}_forced" if forced else f"chain{n}", source)
     return SimpleNamespace(hamilton=module.hamilton, acceleration=module.acceleration,
@@ -346,6 +354,22 @@ def load_generated(stem: str, source: str, derived_from=(), inject: dict | None 
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module, path
+
+
+@functools.cache
+def looped_kernels() -> SimpleNamespace:
+    """The kernels of every chain longer than ``UNROLLED_MAX_LINKS``, conservative or forced.
+
+    They loop over the links instead of unrolling the expressions
+    (:mod:`pendulum_lab.long_chains`): ``O(n)`` per evaluation, one source
+    for every ``n``, compiled once per machine and cached by Numba like the
+    generated kernels. Returns the namespace of :func:`load_kernels`.
+    """
+    from . import long_chains  # compiles (or loads) the kernels on first use
+
+    return SimpleNamespace(hamilton=long_chains.hamilton, acceleration=long_chains.acceleration,
+                           source=inspect.getsource(long_chains),
+                           path=Path(long_chains.__file__), module=long_chains.__name__)
 
 
 def parameters_array(masses, lengths, g) -> np.ndarray:
