@@ -168,3 +168,70 @@ def test_bad_arguments():
     ensemble = pl.simulate(SP, [[1.0], [0.5]], [[0.0], [0.0]], t_end=1.0, dt=0.1)
     with pytest.raises(ValueError, match="one trajectory"):
         animation.html_animation(ensemble, SP)
+
+
+def two_releases(t_end=12.0, nudge=1e-6):
+    """The chaotic release and one a micro-radian away, saved at the same times."""
+    return [
+        pl.simulate(DP, [2.0 + d, 2.5], [0.0, 0.0], t_end=t_end, dt=0.01, method="glrk4")
+        for d in (0.0, nudge)
+    ]
+
+
+def test_a_scene_overlays_several_runs_each_at_its_own_state():
+    runs = two_releases()
+    figure = Figure(figsize=(6, 3), dpi=40)
+    FigureCanvasAgg(figure)
+    scene = animation.PendulumScene(figure, DP, runs, labels=["a", "b"])
+    assert scene.labels == ["a", "b"] and len(scene.chains) == 2
+    for index in (0, 500, 1100):
+        scene.show(index)
+        for (rods, bobs, trail), run in zip(scene.chains, runs):
+            x, y = DP.positions(run.theta[index])
+            assert np.allclose(rods.get_data()[0], [0.0, *x]) and np.allclose(bobs.get_data()[1], y)
+            assert (trail.get_data()[0][-1], trail.get_data()[1][-1]) == (x[-1], y[-1])
+        for k, run in enumerate(runs):
+            t, total = scene.energy_lines["total", k].get_data()
+            assert t[-1] == run.t[index] and total[-1] == run.energy[index]
+            assert scene.energy_lines["kinetic", k].get_data()[1][-1] == run.kinetic[index]
+        assert scene.readout_text(index).endswith(
+            f"{runs[0].energy[index]:.3f} | {runs[1].energy[index]:.3f} J"
+        )
+    # At the start the two chains coincide; after 11 s the runs have parted, so each chain is
+    # drawn from its own run (negative control: the first run's positions are not the second's).
+    lower_bobs = [scene.chains[k][1].get_data() for k in (0, 1)]
+    assert np.hypot(*(np.subtract(lower_bobs[0], lower_bobs[1])[:, -1])) > 0.1
+    scene.show(0)
+    assert np.allclose(scene.chains[0][0].get_data(), scene.chains[1][0].get_data(), atol=1e-5)
+
+
+def test_several_runs_in_one_animation_and_their_labels():
+    runs = [
+        pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=2.0, dt=0.01, method=name)
+        for name in ("leapfrog", "leapfrog_velocity")
+    ]
+    html = animation.html_animation(runs, DP, fps=5)
+    assert animation.count_frames(html.data) == len(animation.frame_indices(runs[0], 5, 1.0))
+    assert animation.scene_runs(runs)[1] == [
+        "leapfrog, dt = 0.01 s",
+        "leapfrog_velocity, dt = 0.01 s",
+    ]
+    same = two_releases(t_end=1.0)
+    assert animation.scene_runs(same)[1] == ["run 1", "run 2"]  # method and step alike
+    # The second run is drawn: the picture differs from the first run's alone.
+    assert animation.still_frame(runs, DP, dpi=30) != animation.still_frame(runs[0], DP, dpi=30)
+
+
+def test_runs_that_cannot_share_a_scene_are_refused():
+    runs = two_releases(t_end=1.0)
+    shorter = pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=0.5, dt=0.01, method="glrk4")
+    with pytest.raises(ValueError, match="must be saved at the same times"):
+        animation.html_animation([runs[0], shorter], DP)
+    with pytest.raises(ValueError, match="`labels` must have one entry per run"):
+        animation.still_frame(runs, DP, labels=["only one"])
+    with pytest.raises(ValueError, match="1 to 5 trajectories"):
+        animation.still_frame(runs * 3, DP)
+    with pytest.raises(TypeError, match="`traj` must be a Trajectory or a list"):
+        animation.html_animation([runs[0], "run"], DP)
+    with pytest.raises(ValueError, match="one trajectory of this 1-link model"):
+        animation.still_frame(runs, SP)

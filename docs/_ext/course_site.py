@@ -169,8 +169,13 @@ def fill_alt_text(app, doctree: nodes.document) -> None:
         blocks = list(cell.findall(nodes.literal_block))[:1]
         texts = alt_texts(blocks[0].astext()) if blocks else []
         if texts:
+            # The same code block without the alt lines. Its rawsource must be its text, or
+            # Sphinx takes it for a parsed literal and does not highlight it.
             shown = without_alt_lines(blocks[0].astext())
-            blocks[0].replace_self(blocks[0].copy() + [nodes.Text(shown)])
+            block = blocks[0].copy()
+            block.rawsource = shown
+            block += nodes.Text(shown)
+            blocks[0].replace_self(block)
         outputs = [
             bundle
             for bundle in cell.findall(_is("mime_bundle"))

@@ -52,6 +52,7 @@ CATEGORIES = (
     "console errors",
     "internal links",
     "dark mode",
+    "code cells",
 )
 
 
@@ -122,9 +123,13 @@ class PageReport:
     math_errors: int = 0
     typeset: int = 0
     error_outputs: list[str] = field(default_factory=list)
+    bare_code: list[str] = field(default_factory=list)
     links: list[str] = field(default_factory=list)
     ids: list[str] = field(default_factory=list)
     animations: list[dict] = field(default_factory=list)
+    # Animations the page's HTML embeds (matplotlib players and <video>s), counted in the file;
+    # None when the animations were not played (the second mode).
+    embedded_animations: int | None = None
     screenshot: str = ""
 
 
@@ -191,10 +196,14 @@ _INSPECT = """
     transparent: darkMode && img.naturalWidth > 0 ? transparency(img) : 0,
     background: getComputedStyle(img).backgroundColor,
   }));
+  // A notebook cell's code must show as a code block (whitespace kept, highlighted).
+  const bareCode = [...document.querySelectorAll(".cell_input")]
+    .filter((el) => !el.querySelector("pre"))
+    .map((el) => el.textContent.trim().slice(0, 80));
   const ids = [...document.querySelectorAll("[id]")].map((el) => el.id)
     .concat([...document.querySelectorAll("a[name]")].map((el) => el.getAttribute("name")));
   return {
-    rawMath, errors, images, ids,
+    rawMath, errors, images, ids, bareCode,
     typeset: document.querySelectorAll("mjx-container").length,
     mathErrors: document.querySelectorAll("mjx-merror").length,
     links: [...document.querySelectorAll("a[href]")].map((a) => a.href),
@@ -203,37 +212,70 @@ _INSPECT = """
 }
 """
 
-# Plays each embedded animation: matplotlib's JavaScript player (.animation) and <video>.
+# Plays each embedded animation: matplotlib's JavaScript player (.animation) and <video>. First
+# every animation is left alone for the same time (the paused control: nothing may move unless
+# played), then each is played in turn and must show a new frame.
 _PLAY = """
 async (seconds) => {
   const sleep = (ms) => new Promise((done) => setTimeout(done, ms));
-  const results = [];
-  for (const player of document.querySelectorAll("div.animation")) {
+  const players = [...document.querySelectorAll("div.animation")];
+  const videos = [...document.querySelectorAll("video")];
+  function shown(player) {
     const slider = player.querySelector("input[type=range]");
     const img = player.querySelector("img");
+    return {
+      frame: slider ? slider.value : null,
+      picture: img ? img.src : null,
+      width: img ? img.naturalWidth : 0,
+    };
+  }
+  if (players.length + videos.length === 0) return [];
+  const start = players.map(shown);
+  const startTimes = videos.map((video) => video.currentTime);
+  await sleep(seconds * 1000);
+  const idle = players.map(shown);
+  const results = [];
+  for (const [k, player] of players.entries()) {
+    const slider = player.querySelector("input[type=range]");
     const play = player.querySelector("button[title=Play]");
-    const before = {frame: slider ? slider.value : null, picture: img ? img.src : null};
+    const before = shown(player);
     if (play) play.click();
     await sleep(seconds * 1000);
-    const after = {frame: slider ? slider.value : null, picture: img ? img.src : null};
+    const after = shown(player);
     const pause = player.querySelector("button[title=Pause]");
     if (pause) pause.click();
     results.push({
-      kind: "player", frames: slider ? Number(slider.max) + 1 : 0,
-      advanced: before.frame !== after.frame, changed: before.picture !== after.picture,
+      kind: "player", frames: slider ? Number(slider.max) + 1 : 0, play_button: Boolean(play),
+      moved_unplayed: start[k].frame !== idle[k].frame || start[k].picture !== idle[k].picture,
+      advanced: before.frame !== after.frame,
+      changed: before.picture !== after.picture && after.width > 0,
     });
   }
-  for (const video of document.querySelectorAll("video")) {
+  for (const [k, video] of videos.entries()) {
+    const unplayed = video.currentTime !== startTimes[k];
     video.muted = true;
+    const before = video.currentTime;
     try { await video.play(); } catch (e) {}
     await sleep(seconds * 1000);
     const t = video.currentTime;
     video.pause();
-    results.push({kind: "video", frames: 0, advanced: t > 0, changed: t > 0});
+    results.push({
+      kind: "video", frames: 0, play_button: true, moved_unplayed: unplayed,
+      advanced: t > before, changed: t > before,
+    });
   }
   return results;
 }
 """
+
+# What counts as an embedded animation in a page's HTML: matplotlib's player is created by
+# ``new Animation(`` once per animation (the class is defined beside it), a video by its tag.
+_EMBEDDED_ANIMATION = re.compile(r"new Animation\(|<video\b", re.IGNORECASE)
+
+
+def embedded_animations(html_file: Path) -> int:
+    """The number of animations the HTML of a page embeds (players and videos)."""
+    return len(_EMBEDDED_ANIMATION.findall(html_file.read_text(encoding="utf-8", errors="replace")))
 
 
 def _screenshot_name(page: str) -> str:
@@ -279,7 +321,10 @@ def _crawl_mode(html_dir, pages, mode, screenshots, play) -> list[PageReport]:
                 f"localStorage.setItem('mode', '{mode}'); localStorage.setItem('theme', '{mode}');"
             )
             for page_path in pages:
-                reports.append(_visit(context, base, page_path, mode, screenshots, play))
+                report = _visit(context, base, page_path, mode, screenshots, play)
+                if play:
+                    report.embedded_animations = embedded_animations(html_dir / page_path)
+                reports.append(report)
             context.close()
         finally:
             browser.close()
@@ -317,6 +362,7 @@ def _visit(context, base: str, page_path: str, mode: str, screenshots, play: boo
         found = page.evaluate(_INSPECT, mode == "dark")
         report.raw_math = found["rawMath"]
         report.error_outputs = found["errors"]
+        report.bare_code = found["bareCode"]
         report.images = found["images"]
         report.ids = found["ids"]
         report.links = found["links"]
@@ -391,13 +437,23 @@ def problems(reports: list[PageReport], html_dir: Path) -> dict[str, list[str]]:
                         f"picture with transparent parts and no light backing "
                         f"({image['background']}): {image['src']}",
                     )  # fmt: skip
+        for text in r.bare_code:
+            add("code cells", r, f"a code cell shown as plain text, not as code: {text!r}")
         for text in r.raw_math:
             add("math", r, f"untypeset mathematics: {text!r}")
         if r.math_errors:
             add("math", r, f"{r.math_errors} MathJax error(s)")
         for animation in r.animations:
+            if animation["moved_unplayed"]:
+                add("animations", r, f"animation changed before it was played: {animation}")
             if not (animation["advanced"] and animation["changed"]):
                 add("animations", r, f"animation did not advance when played: {animation}")
+        if r.embedded_animations is not None and r.embedded_animations != len(r.animations):
+            add(
+                "animations", r,
+                f"{r.embedded_animations} animation(s) embedded in the HTML, "
+                f"{len(r.animations)} found and played in the browser",
+            )  # fmt: skip
         for url in r.external_requests:
             add("external requests", r, f"request outside the site: {url}")
         for text in r.failed_requests:
@@ -442,6 +498,8 @@ def summary(reports: list[PageReport]) -> dict:
         "pages": len(light),
         "images": sum(len(r.images) for r in light),
         "animations": sum(len(r.animations) for r in light),
+        "animations_embedded": sum(r.embedded_animations or 0 for r in light),
+        "pages_with_animations": sorted(r.page for r in light if r.animations),
         "typeset_formulas": sum(r.typeset for r in light),
         "dark_pages": sorted(r.page for r in reports if r.mode == "dark"),
         "screenshots": sorted(r.screenshot for r in reports if r.screenshot),

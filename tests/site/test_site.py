@@ -6,6 +6,7 @@ The negative controls that show each check can fail are in ``test_site_controls.
 
 from __future__ import annotations
 
+import functools
 import html
 import importlib
 import inspect
@@ -95,6 +96,66 @@ def test_api_pages_cover_every_public_module_and_show_the_examples(course_site):
     assert examples > 0, "no docstring example found: the check would pass vacuously"
 
 
+@functools.cache
+def _public_modules() -> tuple[str, ...]:
+    return ("pendulum_lab",) + tuple(
+        info.name
+        for info in pkgutil.walk_packages(pendulum_lab.__path__, "pendulum_lab.")
+        if not any(part.startswith("_") for part in info.name.split("."))
+    )
+
+
+@functools.cache
+def _page_text(path) -> str:
+    return path.read_text(encoding="utf-8")
+
+
+def _reexported_names():
+    """(package, name, object) for every class and function a package exports in ``__all__``."""
+    for name in _public_modules():
+        module = importlib.import_module(name)
+        if not hasattr(module, "__path__"):
+            continue
+        for attr in getattr(module, "__all__", []):
+            obj = getattr(module, attr)
+            if inspect.isclass(obj) or inspect.isfunction(obj):
+                yield name, attr, obj
+
+
+def _api_anchors(html_dir, obj) -> list[str]:
+    """The anchors of ``obj`` on the API pages of the public modules that document it (a
+    module page documents its ``__all__``, including names it imports)."""
+    found = []
+    for name in _public_modules():
+        module = importlib.import_module(name)
+        if hasattr(module, "__path__"):
+            continue  # a package's page lists its modules
+        for member_name in getattr(module, "__all__", None) or [obj.__name__]:
+            if getattr(module, member_name, None) is obj:
+                anchor = f'id="{name}.{member_name}"'
+                page = html_dir / "reference" / f"{name}.html"
+                if page.is_file() and anchor in _page_text(page):
+                    found.append(f"{name}.{member_name}")
+    return found
+
+
+def test_every_name_a_package_exports_is_documented(course_site):
+    # A name that a package exports from a private module (one whose name starts with "_")
+    # has a page only if a public module lists it in its __all__: the walk skips private ones.
+    names = list(_reexported_names())
+    assert len(names) > 100, "too few exported names found: the check would pass vacuously"
+    missing = [
+        f"{package}.{attr} (defined in {obj.__module__})"
+        for package, attr, obj in names
+        if not _api_anchors(course_site.output, obj)
+    ]
+    assert not missing, missing
+    # Negative control: a function of a private module that no public module lists.
+    from pendulum_lab._validation import positive_number
+
+    assert not _api_anchors(course_site.output, positive_number)
+
+
 def test_no_launch_link_while_the_repository_is_unset(course_site):
     # docs/conf.py leaves course_repository_url empty until the course has a public address.
     for page in list_pages(course_site.output):
@@ -109,7 +170,8 @@ def test_no_launch_link_while_the_repository_is_unset(course_site):
 def test_pages_in_the_browser(course_pages, category):
     """No error output or traceback; every picture loaded and described; mathematics typeset;
     each animation advances when played; no request outside the site and none failing; no
-    console error; every internal link and anchor resolves; readable in dark mode."""
+    console error; every internal link and anchor resolves; readable in dark mode; every code
+    cell shown as a code block."""
     _, found = course_pages
     if found[category]:
         pytest.fail(f"{category}: {_report(found[category])}", pytrace=False)
@@ -122,6 +184,16 @@ def test_the_checks_saw_what_they_check(course_pages, course_site):
     assert sum(len(r.images) for r in light) >= len(NOTEBOOKS), "too few pictures seen"
     assert sum(r.typeset for r in light) > 0, "no typeset mathematics seen"
     assert sum(len(r.animations) for r in light) >= 1, "no embedded animation was played"
+    # The simulator and the key motions play on the pages of the notebooks that embed them
+    # (notebook 06: the report's failing leapfrog; 10: the simulator; 11: chaos; 12: a chain).
+    embedding = {
+        f"notebooks/{n.stem}.html"
+        for n in NOTEBOOKS
+        if "animation.html_animation(" in n.read_text(encoding="utf-8")
+    }
+    assert {"notebooks/06_leapfrog.html", "notebooks/11_double_pendulum_chaos.html"} <= embedding
+    played = {r.page for r in light if r.animations}
+    assert embedding <= played, f"no animation played on {sorted(embedding - played)}"
     assert sum(len(r.links) for r in light) > 0
 
 

@@ -109,6 +109,10 @@ def test_a_figure_without_alt_text_fails_the_build_and_an_alt_line_mends_it(tmp_
     assert result.ok, "\n".join(result.warnings())
     page = (site / "_build" / "html" / "lesson.html").read_text(encoding="utf-8")
     assert 'alt="A straight line falling from 1 to 0."' in page
+    # The cell's code is still shown as highlighted code, without its alt line.
+    code = '<div class="highlight"><pre><span></span><span class="c1"># expect: figure</span>'
+    assert code in page
+    assert "# alt:" not in page
 
 
 def test_a_widget_without_a_static_picture_fails_the_build(tmp_path):
@@ -148,19 +152,58 @@ def _transparent_png() -> str:
     return base64.b64encode(buffer.getvalue()).decode()
 
 
-def _frozen_animation() -> str:
-    """matplotlib's JavaScript player with three identical frames: it can never advance."""
+def _animation(alt: str, moving: bool = True) -> str:
+    """matplotlib's JavaScript player (a frame every 200 ms): a dot moving from left to right over
+    twelve frames (more than a played check sees, so that a loop cannot come back to the frame it
+    started from), or (``moving=False``) three identical frames, so that it can never advance."""
     from matplotlib.animation import FuncAnimation
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(2, 1), dpi=40)
-    html = FuncAnimation(figure, lambda k: [], frames=3).to_jshtml(default_mode="loop")
+    frames = 12 if moving else 3
+    axes = figure.add_subplot(xlim=(-0.5, frames - 0.5), ylim=(-1, 1))
+    (dot,) = axes.plot([0], [0], "o")
+
+    def draw(k):
+        dot.set_xdata([k if moving else 0])
+        return [dot]
+
+    html = FuncAnimation(figure, draw, frames=frames, interval=200).to_jshtml(default_mode="loop")
     html = re.sub(r"<link[^>]*https?://[^>]*>", "", html)  # the external-request control is apart
-    return html.replace("<img ", '<img alt="A frozen animation" ', 1)
+    return html.replace("<img ", f'<img alt="{alt}" ', 1)
+
+
+def _frozen_animation() -> str:
+    return _animation("A frozen animation", moving=False)
+
+
+def _dead_player() -> str:
+    """A player whose frames are never loaded: the script that creates it is missing."""
+    html = _animation("A player without its animation")
+    html, removed = re.subn(r"<script[^>]*>\s*/\* Instantiate the Animation class.*?</script>",
+                            "", html, flags=re.DOTALL)  # fmt: skip
+    assert removed == 1
+    return html
+
+
+def _unfound_animation() -> str:
+    """A working animation that the crawl cannot find as a player (its wrapper renamed): the
+    count of animations embedded in the HTML must catch it."""
+    html = _animation("An animation in disguise")
+    return html.replace('<div class="animation">', '<div class="movie">', 1)
+
+
+def _autoplaying_animation() -> str:
+    """A working animation that starts by itself: the paused control must notice it moving."""
+    html = '<div id="autoplay">' + _animation("An animation that plays by itself") + "</div>"
+    return html + (
+        "<script>setTimeout(() => document.querySelector('#autoplay button[title=Play]')"
+        ".click(), 100);</script>"
+    )
 
 
 @pytest.fixture(scope="module")
-def control_site(tmp_path_factory):
+def control_crawl(tmp_path_factory):
     """A site whose pages each carry one defect, and one clean page; built without -W so that
     the defective pages exist, then opened in the browser in both modes."""
     folder = tmp_path_factory.mktemp("control_site")
@@ -187,10 +230,18 @@ def control_site(tmp_path_factory):
                 '# An external script\n\n<script src="https://cdn.example.invalid/x.js"></script>\n'
             ),
             "raw_math.md": "# Untypeset mathematics\n\n<p>$$ E = T + V $$</p>\n",
+            "bare_code.md": (
+                "# A code cell without its code block\n\n"
+                '<div class="cell_input docutils container">x = 1\nprint(x)</div>\n'
+            ),
             "console_error.md": (
                 '# A console error\n\n<script>console.error("control: failure");</script>\n'
             ),
             "frozen_animation.md": "# A frozen animation\n\n" + _frozen_animation() + "\n",
+            "moving_animation.md": "# A working animation\n\n" + _animation("A dot moving") + "\n",
+            "dead_player.md": "# A player without its animation\n\n" + _dead_player() + "\n",
+            "unfound_animation.md": "# An animation not found\n\n" + _unfound_animation() + "\n",
+            "autoplay.md": "# An animation playing by itself\n\n" + _autoplaying_animation() + "\n",
             "transparent.md": (
                 "# A transparent picture\n\n"
                 f'<img alt="A black line" src="data:image/png;base64,{_transparent_png()}" '
@@ -206,7 +257,13 @@ def control_site(tmp_path_factory):
     html = folder / "_build" / "html"
     assert (html / "clean.html").is_file(), result.log[-3000:]
     reports = crawl(html)
-    return problems(reports, html)
+    return reports, problems(reports, html)
+
+
+@pytest.fixture(scope="module")
+def control_site(control_crawl):
+    """The problems found on the control site, by category."""
+    return control_crawl[1]
 
 
 EXPECTED = {
@@ -217,7 +274,11 @@ EXPECTED = {
     "raw_math": "math",
     "console_error": "console errors",
     "frozen_animation": "animations",
+    "dead_player": "animations",
+    "unfound_animation": "animations",
+    "autoplay": "animations",
     "transparent": "dark mode",
+    "bare_code": "code cells",
 }
 
 
@@ -232,6 +293,26 @@ def test_each_defect_is_caught(control_site, page):
 def test_the_clean_page_shows_no_problem(control_site):
     found = [p for category in CATEGORIES for p in control_site[category]]
     assert not [p for p in found if p.startswith("clean.html ")], found
+
+
+def test_a_working_animation_passes_and_each_broken_one_fails_for_its_reason(control_crawl):
+    reports, found = control_crawl
+    played = {r.page: r for r in reports if r.embedded_animations is not None}
+    # The positive control: found, still until played, then advancing; no problem at all.
+    (moving,) = played["moving_animation.html"].animations
+    assert moving["frames"] == 12 and not moving["moved_unplayed"]
+    assert moving["advanced"] and moving["changed"]
+    assert not [p for c in CATEGORIES for p in found[c] if p.startswith("moving_animation.html ")]
+    animations = found["animations"]
+
+    def flagged(page: str) -> str:
+        return " ".join(p for p in animations if p.startswith(f"{page}.html "))
+
+    assert "did not advance when played" in flagged("frozen_animation")
+    assert "did not advance when played" in flagged("dead_player")
+    assert "1 animation(s) embedded in the HTML, 0 found" in flagged("unfound_animation")
+    assert "changed before it was played" in flagged("autoplay")
+    assert "did not advance" not in flagged("autoplay")  # it plays, it just did not wait
 
 
 def test_both_broken_links_are_caught(control_site):

@@ -42,13 +42,14 @@ from .export import (
     save_animation,
     still_frame,
 )
-from .scene import FPS, PendulumScene, encode_frame, frame_indices
+from .scene import FPS, RUN_COLOURS, PendulumScene, encode_frame, frame_indices, scene_runs
 from .simulator import Simulator, simulator
 
 __all__ = [
     "EXPORT_SIZE",
     "FPS",
     "MAX_FRAMES",
+    "RUN_COLOURS",
     "SPEEDS",
     "TRAIL",
     "PendulumScene",
@@ -58,6 +59,7 @@ __all__ = [
     "frame_indices",
     "html_animation",
     "save_animation",
+    "scene_runs",
     "simulator",
     "still_frame",
 ]

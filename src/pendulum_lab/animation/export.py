@@ -5,7 +5,8 @@
 :meth:`matplotlib.animation.Animation.to_jshtml`); :func:`save_animation`
 writes an animated GIF (Pillow) or an MP4 (the ffmpeg binary that the
 ``imageio-ffmpeg`` package ships); :func:`still_frame` draws one frame. All
-draw the scene of :mod:`.scene`, blitting only the moving artists.
+draw the scene of :mod:`.scene`, blitting only the moving artists, and all
+take one run or several runs of a model saved at the same times, overlaid.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from .._png import png_bytes
 from ..model import PendulumModel
 from ..simulate import Trajectory
 from ..widgets.controls import TRAIL
-from .scene import FPS, PendulumScene, encode_frame, frame_indices
+from .scene import FPS, PendulumScene, encode_frame, frame_indices, scene_runs
 
 __all__ = [
     "EXPORT_SIZE",
@@ -47,20 +48,20 @@ EXPORT_SIZE = (9, 3.6)
 _EXTERNAL_LINK = re.compile(r"<link\b[^>]*\bhref=[\"']https?://[^>]*>\s*", re.IGNORECASE)
 
 
-def _check_run(traj, model) -> None:
-    """A single trajectory and a model, or a clear error naming the argument."""
-    if not isinstance(traj, Trajectory):
-        raise TypeError(f"`traj` must be a Trajectory, got {type(traj).__name__}")
+def _check_run(traj, model) -> Trajectory:
+    """The first of the runs (which fixes the frames' times) once ``traj`` (a trajectory or
+    several, see :func:`~pendulum_lab.animation.scene_runs`) and ``model`` are checked."""
     check.pendulum_model(model)
+    return scene_runs(traj)[0][0]
 
 
 def _export_scene(
-    traj, model, trail: float, dpi: float, animated: bool = True
+    traj, model, trail: float, dpi: float, labels=None, animated: bool = True
 ) -> tuple[Figure, PendulumScene]:
-    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the run's scene."""
+    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the runs' scene."""
     figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
     FigureCanvasAgg(figure)
-    return figure, PendulumScene(figure, model, traj, trail, animated=animated)
+    return figure, PendulumScene(figure, model, traj, trail, animated=animated, labels=labels)
 
 
 class _Blitting:
@@ -115,7 +116,7 @@ class _BlittingMP4Writer(_Blitting, FFMpegWriter):
 
 
 def html_animation(
-    traj: Trajectory,
+    traj,
     model: PendulumModel,
     *,
     fps: float = 15,
@@ -123,6 +124,7 @@ def html_animation(
     trail: float = TRAIL,
     dpi: float = 64,
     max_frames: int = MAX_FRAMES,
+    labels=None,
 ):
     """A self-contained HTML/JavaScript animation of a run, for use without a kernel.
 
@@ -132,10 +134,14 @@ def html_animation(
     (:class:`matplotlib.animation.HTMLWriter`) adds play/pause, step and speed
     buttons and a frame slider, all running in the browser.
 
+    Several runs saved at the same times (two nearby releases, two methods
+    from one release) are overlaid in one animation, each in its colour, with
+    their total and kinetic energies (:class:`~pendulum_lab.animation.PendulumScene`).
+
     Parameters
     ----------
-    traj : Trajectory
-        A single trajectory of ``model``.
+    traj : Trajectory or sequence of Trajectory
+        A single trajectory of ``model``, or up to five saved at the same times.
     model : PendulumModel
     fps : float
         Frames per second of the player, ``> 0``.
@@ -149,6 +155,9 @@ def html_animation(
         Refuse to make more frames than this (the output grows by tens of
         kilobytes per frame): shorten the run, or raise ``speed`` or lower
         ``fps``.
+    labels : sequence of str, optional
+        Names of the runs in the legend when there are several; by default
+        their methods and steps.
 
     Returns
     -------
@@ -163,18 +172,21 @@ def html_animation(
     >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
     >>> count_frames(html_animation(traj, sp_, fps=5).data)
     6
+    >>> nudged = pl.simulate(sp_, [1.01], [0.0], t_end=1.0, dt=0.01)
+    >>> count_frames(html_animation([traj, nudged], sp_, fps=5, labels=["1", "1.01"]).data)
+    6
     """
     from IPython.display import HTML
 
-    _check_run(traj, model)
+    first = _check_run(traj, model)
     max_frames = check.integer_at_least("max_frames", max_frames, 1)
-    frames = frame_indices(traj, fps, speed)
+    frames = frame_indices(first, fps, speed)
     if len(frames) > max_frames:
         raise ValueError(
             f"the animation would have {len(frames)} frames, more than `max_frames` = "
             f"{max_frames}; shorten the run, raise `speed` or lower `fps`"
         )
-    figure, scene = _export_scene(traj, model, trail, dpi)
+    figure, scene = _export_scene(traj, model, trail, dpi, labels)
     writer = _BlittingHTMLWriter(
         scene, fps=fps, default_mode="loop", embed_limit=max_frames
     )  # MB: never the binding limit
@@ -205,7 +217,7 @@ def _ffmpeg() -> str:
 
 
 def save_animation(
-    traj: Trajectory,
+    traj,
     model: PendulumModel,
     path,
     *,
@@ -214,6 +226,7 @@ def save_animation(
     speed: float = 1.0,
     trail: float = TRAIL,
     dpi: float = 80,
+    labels=None,
 ) -> Path:
     """Write a run as an animated GIF or an MP4 video, for slides.
 
@@ -225,8 +238,9 @@ def save_animation(
 
     Parameters
     ----------
-    traj : Trajectory
-        A single trajectory of ``model``.
+    traj : Trajectory or sequence of Trajectory
+        A single trajectory of ``model``, or several saved at the same times
+        (overlaid, as in :func:`html_animation`).
     model : PendulumModel
     path : str or Path
         Ends in ``.gif`` or ``.mp4``.
@@ -241,6 +255,8 @@ def save_animation(
         Trail length [s].
     dpi : float
         Resolution; the figure is 9 x 3.6 inches.
+    labels : sequence of str, optional
+        Names of the runs in the legend when there are several.
 
     Returns
     -------
@@ -266,17 +282,17 @@ def save_animation(
     """
     from matplotlib import rc_context
 
-    _check_run(traj, model)
+    first = _check_run(traj, model)
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".gif", ".mp4"):
         raise ValueError(f"`path` must end in .gif or .mp4, got {path.name!r}")
-    frames = frame_indices(traj, fps, speed)
+    frames = frame_indices(first, fps, speed)
     if seconds is not None:
         seconds = check.positive_number("seconds", seconds)
         frames = frames[: max(1, round(seconds * fps))]
     settings = {} if suffix == ".gif" else {"animation.ffmpeg_path": _ffmpeg()}
-    figure, scene = _export_scene(traj, model, trail, dpi)
+    figure, scene = _export_scene(traj, model, trail, dpi, labels)
     if suffix == ".gif":
         writer = _BlittingGIFWriter(scene, fps=fps)
     else:
@@ -289,12 +305,13 @@ def save_animation(
 
 
 def still_frame(
-    traj: Trajectory,
+    traj,
     model: PendulumModel,
     *,
     index: int | None = None,
     trail: float = TRAIL,
     dpi: float = 80,
+    labels=None,
 ) -> bytes:
     """One frame of a run's animation as a PNG: by default the last, with the whole run's energies.
 
@@ -306,8 +323,8 @@ def still_frame(
 
     Parameters
     ----------
-    traj : Trajectory
-        A single trajectory of ``model``.
+    traj : Trajectory or sequence of Trajectory
+        A single trajectory of ``model``, or several saved at the same times.
     model : PendulumModel
     index : int, optional
         The saved state shown, ``0 <= index < len(traj.t)``; default the last.
@@ -315,6 +332,8 @@ def still_frame(
         Trail length [s].
     dpi : float
         Resolution; the figure is 9 x 3.6 inches.
+    labels : sequence of str, optional
+        Names of the runs in the legend when there are several.
 
     Returns
     -------
@@ -329,10 +348,9 @@ def still_frame(
     >>> still_frame(traj, sp_, dpi=40)[:8]
     b'\\x89PNG\\r\\n\\x1a\\n'
     """
-    _check_run(traj, model)
-    last = len(traj.t) - 1
+    last = len(_check_run(traj, model).t) - 1
     index = last if index is None else check.index_below("index", index, last + 1)
-    figure, scene = _export_scene(traj, model, trail, dpi, animated=False)
+    figure, scene = _export_scene(traj, model, trail, dpi, labels, animated=False)
     scene.show(index)
     figure.canvas.draw()
     return png_bytes(np.asarray(figure.canvas.buffer_rgba()))

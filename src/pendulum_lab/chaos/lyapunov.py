@@ -480,7 +480,7 @@ def lyapunov_spectrum(
     Jacobian of the whole field, forces included). Every ``save_every``
     steps they are re-orthonormalised, ``V = Q R`` (Gram-Schmidt in matrix
     form); ``Q`` goes on, and ``log |R_ii|`` is added to the sum of
-    exponent ``i`` [Benettin]_.
+    exponent ``i`` (Benettin, Galgani, Giorgilli and Strelcyn, 1980, in the References).
 
     The sum of all exponents is the mean rate at which the flow changes
     phase-space volume, the time average of ``tr A`` (Liouville's formula).
