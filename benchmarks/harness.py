@@ -87,6 +87,15 @@ class Config:
     bif_c_members: int = 20  # members the C loop runs for its time per step
     live_rounds: int = 15  # item 9: interleaved update/recompute rounds in the kernel
     live_browser_seconds: float = 5.0  # item 9: play time counted in Chromium (0: not run)
+    chain_rounds: int = 3  # item 10: long chains
+    chain_first_use: tuple = (10, 20, 50)
+    chain_printed: tuple = (3, 4, 5)
+    chain_evaluations: int = 200_000
+    chain_sizes: tuple = (3, 5, 10, 20, 50, 100, 200)
+    chain_step_budget: int = 20_000  # steps x links per timed run
+    cluster_size: int = 1000  # item 11: flip-time map on a Dask LocalCluster
+    cluster_t_end: float = 10.0
+    cluster_workers: int = 2
 
 
 FULL = Config("full")
@@ -116,6 +125,14 @@ QUICK = replace(
     bif_c_members=10,
     live_rounds=4,
     live_browser_seconds=2.0,
+    chain_rounds=1,
+    chain_first_use=(20,),
+    chain_printed=(3,),
+    chain_evaluations=20_000,
+    chain_sizes=(3, 10, 50),
+    chain_step_budget=5_000,
+    cluster_size=150,
+    cluster_t_end=5.0,
 )
 SMOKE = replace(
     FULL,
@@ -152,6 +169,14 @@ SMOKE = replace(
     bif_c_members=2,
     live_rounds=1,
     live_browser_seconds=0.0,
+    chain_rounds=1,
+    chain_first_use=(10,),
+    chain_printed=(3,),
+    chain_evaluations=100,
+    chain_sizes=(3, 10, 20),
+    chain_step_budget=200,
+    cluster_size=8,
+    cluster_t_end=0.5,
 )
 CONFIGS = {"full": FULL, "quick": QUICK, "smoke": SMOKE}
 

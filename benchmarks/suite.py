@@ -1,4 +1,4 @@
-"""The benchmark suite (issue 7; items 7, 8, 9 from issues 12, 13, 16), each a ratio side by side.
+"""The benchmark suite (issue 7; items 7-11 from issues 12, 13, 16, 17): ratios side by side.
 
 One file per item (``item_slider.py`` ... ``item_live.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the
@@ -32,9 +32,11 @@ from harness import (
 )
 from item_bifurcation import bench_bifurcation
 from item_c_limit import bench_c_limit
+from item_distributed import bench_distributed
 from item_ensemble import bench_ensemble
 from item_first_use import bench_first_use
 from item_live import bench_live
+from item_long_chains import bench_long_chains
 from item_long_run import bench_long_run
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
@@ -69,6 +71,8 @@ ITEMS = {
     "variational": (7, bench_variational, False),
     "bifurcation": (8, bench_bifurcation, False),
     "live": (9, bench_live, False),
+    "long_chains": (10, bench_long_chains, False),
+    "distributed": (11, bench_distributed, False),
 }
 
 

@@ -2,10 +2,12 @@
 
 Layers, each using only the ones before it:
 
-``mechanics`` (SymPy derivation) -> ``model`` (numeric, lambdified) ->
+``mechanics`` (SymPy derivation) -> ``model`` (numeric: lambdified, or looped over
+the links of a long chain in ``long_chains``) ->
 ``integrators`` (one-step maps of Hamiltonian vector fields) -> ``simulate``
 (and ``segments``, the same runs handed out piece by piece) -> ``events``,
-``analysis``, ``chaos``, ``plotting``, ``widgets``, ``animation``, ``report``.
+``analysis``, ``chaos``, ``plotting``, ``widgets``, ``animation``, ``report``;
+``cluster`` runs ensembles on a Dask cluster.
 
 Quick start
 -----------
@@ -34,9 +36,9 @@ __version__ = "0.1.0"
 
 # Submodules that pull in heavy dependencies (ipywidgets, matplotlib) load on
 # first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
-_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "codegen", "discrete_mechanics", "events",
-                    "geometric", "mechanics", "plotting", "report", "source", "tables", "timing",
-                    "warmup", "widgets"}
+_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "cluster", "codegen", "discrete_mechanics",
+                    "events", "geometric", "long_chains", "mechanics", "plotting", "report",
+                    "source", "tables", "timing", "warmup", "widgets"}
 
 
 def __getattr__(name):

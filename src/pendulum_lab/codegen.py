@@ -30,6 +30,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import importlib.util
+import inspect
 import math
 import os
 import sys
@@ -45,12 +46,14 @@ from numba import types
 from ._signatures import VECTOR
 from .discrete_mechanics import DiscreteLagrangian, discrete_lagrangian
 from .mechanics import Chain, derive_chain
+from .model import UNROLLED_MAX_LINKS
 
 __all__ = [
     "discrete_kernel_source",
     "kernel_source",
     "load_discrete_kernels",
     "load_kernels",
+    "looped_kernels",
     "parameters_array",
     "solve_spd",
 ]
@@ -210,13 +213,18 @@ def _write_if_changed(path: Path, text: str) -> None:
 
 
 @functools.cache
-def load_kernels(n: int, forced: bool = False) -> SimpleNamespace:
+def load_kernels(n: int, forced: bool = False, looped: bool | None = None) -> SimpleNamespace:
     """Compile (or load from the disk cache) the kernels for ``n`` links.
 
     ``forced`` selects the chain with damping and drive (see
     :class:`~pendulum_lab.mechanics.Chain`). Returns a namespace with
-    ``hamilton`` and ``acceleration``.
+    ``hamilton`` and ``acceleration`` (and their ``source`` and ``path``).
+    ``looped``: whether to take :func:`looped_kernels` instead of generating
+    them from the expressions; by default for chains longer than
+    ``UNROLLED_MAX_LINKS`` (tests and benchmarks compare the two).
     """
+    if looped if looped is not None else n > UNROLLED_MAX_LINKS:
+        return looped_kernels()
     source = kernel_source(derive_chain(n, forced))
     module, path = _import_generated(f"chain{n}_forced" if forced else f"chain{n}", source)
     return SimpleNamespace(hamilton=module.hamilton, acceleration=module.acceleration,
@@ -242,6 +250,22 @@ def _import_generated(stem: str, source: str, derived_from=()):
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module, path
+
+
+@functools.cache
+def looped_kernels() -> SimpleNamespace:
+    """The kernels of every chain longer than ``UNROLLED_MAX_LINKS``, conservative or forced.
+
+    They loop over the links instead of unrolling the expressions
+    (:mod:`pendulum_lab.long_chains`): ``O(n)`` per evaluation, one source
+    for every ``n``, compiled once per machine and cached by Numba like the
+    generated kernels. Returns the namespace of :func:`load_kernels`.
+    """
+    from . import long_chains  # compiles (or loads) the kernels on first use
+
+    return SimpleNamespace(hamilton=long_chains.hamilton, acceleration=long_chains.acceleration,
+                           source=inspect.getsource(long_chains),
+                           path=Path(long_chains.__file__))
 
 
 def parameters_array(masses, lengths, g) -> np.ndarray:

@@ -94,6 +94,10 @@ class ModelFamily(PendulumModel):
         self._params = params
         self._has_frequency = has_frequency
 
+    def __reduce__(self):
+        # Pickled as the base model and the values (for Dask workers, as PendulumModel is).
+        return ModelFamily, (self.base, dict(self.values))
+
     def _mapped(self, transform) -> ModelFamily:
         """A family with ``transform`` (an array -> array function) applied to every array."""
         family = object.__new__(ModelFamily)

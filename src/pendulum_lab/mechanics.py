@@ -1,6 +1,6 @@
 """Symbolic mechanics of a planar chain of pendulums (SymPy only).
 
-This module knows pendulums and nothing about integrators. It derives, for a
+This module knows pendulums and nothing about integrators. It gives, for a
 chain of ``n`` point masses on massless rigid rods::
 
       pivot
@@ -13,10 +13,29 @@ chain of ``n`` point masses on massless rigid rods::
            (m_2)
               ...
 
-the kinetic and potential energies from the Cartesian bob positions, the
-Lagrangian, the Euler-Lagrange equations in the form ``M(q) q'' = F(q, q')``,
-the canonical momenta ``p = M(q) q'``, the Hamiltonian by Legendre transform,
-Hamilton's equations, and the equilibria with their Jacobians.
+the kinetic and potential energies, the Lagrangian, the Euler-Lagrange
+equations in the form ``M(q) q'' = F(q, q')``, the canonical momenta
+``p = M(q) q'``, the Hamiltonian by Legendre transform, Hamilton's equations,
+and the equilibria with their Jacobians.
+
+The equations have a closed structure. Bob ``k`` sits at
+``(sum_(j<=k) l_j sin(theta_j), -sum_(j<=k) l_j cos(theta_j))``, so with the
+*tail masses* ``mu_i = m_i + ... + m_n`` (everything at or below bob ``i``):
+
+``M_ij = mu_max(i,j) l_i l_j cos(theta_i - theta_j)``,
+``V = -g sum_i mu_i l_i cos(theta_i)``,
+``dL/dtheta_i = -omega_i sum_j mu_max(i,j) l_i l_j sin(theta_i - theta_j) omega_j
+- g mu_i l_i sin(theta_i)``,
+``F_i = -sum_j mu_max(i,j) l_i l_j sin(theta_i - theta_j) omega_j^2 - g mu_i l_i sin(theta_i)``.
+
+(Differentiating ``T = 1/2 sum_ij M_ij omega_i omega_j``: ``dT/dtheta_i`` and
+the ``d/dt`` of ``dT/domega_i`` share the term in ``omega_i omega_j``, which
+cancels in ``F``.) :class:`Chain` builds its matrices entry by entry from
+these formulas, in ``O(n^2)`` SymPy operations;
+:func:`lagrangian_derivation` derives the same equations the long way, by
+expanding the Lagrangian of the bob positions, and the tests assert that the
+two agree exactly. For short chains the entries are expanded into the very
+terms the long way gives.
 
 A *forced* chain (``Chain(n, forced=True)``) also has generalized forces
 ``Q`` that are not derived from a potential: a viscous damping torque at every
@@ -26,12 +45,15 @@ and a periodic drive torque ``A cos(Omega t)`` at the pivot, on the first
 link. They enter the Euler-Lagrange equations as ``M q'' = F + Q`` with
 ``Q = -dR/domega + (A cos(Omega t), 0, ..., 0)``; with absolute angles the
 damping part is ``-C omega`` with ``C`` tridiagonal. The conservative chain
-is the special case ``c_i = A = 0``; it is derived separately so that its
+is the special case ``c_i = A = 0``; it is built separately so that its
 expressions carry no zero terms.
 
-Masses, lengths, ``g`` and the force parameters stay symbolic. Nothing here inverts ``M``
-symbolically unless asked to (:attr:`Chain.hamiltonian` does, lazily): the
-numeric layer solves ``M x = b`` numerically, as PyDy's code generator does.
+Masses, lengths, ``g`` and the force parameters stay symbolic. Nothing here
+inverts ``M`` symbolically unless asked to (:attr:`Chain.hamiltonian` does,
+lazily): the numeric layer solves ``M x = b`` numerically, as PyDy's code
+generator does. What grows faster than ``n^2`` (a symbolic inverse, all
+``2**n`` equilibria, the expanded Lagrangian) is refused for long chains with
+a message that says the limit and why (:data:`LIMITS`).
 
 Notes
 -----
@@ -58,7 +80,45 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
-__all__ = ["Chain", "Equilibrium", "derive_chain", "is_identically_zero"]
+__all__ = [
+    "LIMITS",
+    "Chain",
+    "Equilibrium",
+    "LagrangianDerivation",
+    "derive_chain",
+    "is_identically_zero",
+    "lagrangian_derivation",
+]
+
+#: Chains up to this many links get their entries expanded into the terms the
+#: Lagrangian derivation gives (the forms the course shows, counts and prints
+#: kernels from; under a second for 10 links); expanded, an entry of a longer
+#: chain's forcing would hold about n^2 / 2 terms instead of n.
+EXPANDED_MAX_LINKS = 10
+#: Building the symbolic equations shows a progress bar from this many links.
+PROGRESS_LINKS = 30
+#: The parts of a chain refused beyond a number of links: ``{part: (limit, why)}``.
+#: Times measured on a 2-core machine; numeric models (``pl.n_pendulum``) need
+#: none of these parts.
+LIMITS = {
+    "the symbolic equations": (
+        100, "their matrices hold n^2 entries, built one by one (about 20 s for 100 links); "
+             "numeric models (pl.n_pendulum) do not need them"),
+    "the Lagrangian derivation": (
+        6, "it expands the Lagrangian into about n^3 / 3 terms (seconds per link from 6 on); "
+           "Chain builds the same equations from their closed form"),
+    "the closed-form accelerations": (
+        2, "solving M alpha = F symbolically did not finish in 10 minutes for 3 links; "
+           "PendulumModel.accelerations evaluates them numerically for any chain"),
+    "the closed-form Jacobian": (
+        2, "it differentiates the closed-form accelerations (refused beyond 2 links); "
+           "PendulumModel.jacobian evaluates it numerically for any chain"),
+    "the closed-form inverse mass matrix": (
+        3, "its determinant has n! terms (over a minute for 4 links); the numeric layer "
+           "solves M x = b instead"),
+    "the list of all equilibria": (
+        8, "there are 2**n of them; Chain.equilibrium(name) builds any one"),
+}
 
 
 def _names(base: str, n: int) -> list[str]:
@@ -122,6 +182,11 @@ class Equilibrium:
 class Chain:
     """Symbolic equations of a planar chain of ``n`` pendulums.
 
+    The equations are built entry by entry from their closed form (see the
+    module docstring), on first access of each attribute; constructing a
+    ``Chain`` only makes its symbols. :func:`lagrangian_derivation` derives
+    the same equations the long way, from the bob positions, as a check.
+
     Parameters
     ----------
     n : int
@@ -134,10 +199,24 @@ class Chain:
     ----------
     parameters : tuple of sympy.Symbol
         ``(m_1..m_n, l_1..l_n, g)``, then ``(c_1..c_n, A, Omega)`` if forced.
+    tail_masses : tuple of sympy.Expr
+        ``mu_i = m_i + ... + m_n``, the mass at or below bob ``i``.
+    mass_matrix : sympy.Matrix, shape (n, n)
+    kinetic, potential, lagrangian : sympy.Expr
+    dlagrangian_dq : sympy.Matrix, shape (n, 1)
+        ``dL/dq``: the rate of change of the momenta, ``-dH/dq``.
+    momenta : sympy.Matrix, shape (n, 1)
+        ``p = M(q) omega``.
     generalized_forces : sympy.Matrix, shape (n, 1)
         ``Q(omega, t)``, zero for the conservative chain.
     forcing : sympy.Matrix, shape (n, 1)
         The right-hand side of ``M(q) alpha = forcing``, ``Q`` included.
+
+    Raises
+    ------
+    ValueError
+        On first access of a part that is refused for this ``n`` (the message
+        says the limit and why; see :data:`LIMITS`).
 
     Examples
     --------
@@ -148,6 +227,8 @@ class Chain:
     Matrix([[-g*l*m*sin(theta)]])
     >>> derive_chain(1, forced=True).forcing
     Matrix([[A*cos(Omega*t) - c*omega - g*l*m*sin(theta)]])
+    >>> derive_chain(3).mass_matrix[0, 2]
+    l_1*l_3*m_3*cos(theta_1 - theta_3)
     """
 
     def __init__(self, n: int, forced: bool = False):
@@ -168,70 +249,180 @@ class Chain:
         self.g = sp.Symbol("g", positive=True)
         self.t = sp.Symbol("t", real=True)
         self.parameters = (*self.masses, *self.lengths, self.g)
-
-        # Cartesian bob positions, pivot at the origin, y pointing up.
-        x, y, xs, ys = sp.Integer(0), sp.Integer(0), [], []
-        for qi, li in zip(self.q, self.lengths):
-            x, y = x + li * sp.sin(qi), y - li * sp.cos(qi)
-            xs.append(x)
-            ys.append(y)
-        self.positions = [(xi, yi) for xi, yi in zip(xs, ys)]
-
-        # T = 1/2 sum_i m_i |v_i|^2 with v_i = J_i omega, so T = 1/2 omega^T M omega
-        # with M = sum_i m_i J_i^T J_i. Entry (j, k) is a short sum of
-        # cos(theta_j) cos(theta_k) + sin(theta_j) sin(theta_k) terms: the targeted
-        # rule TR10i folds it into cos(theta_j - theta_k) (sin^2 + cos^2 = 1 on the
-        # diagonal). Nothing large is ever simplified.
-        jac = [sp.Matrix([[xi], [yi]]).jacobian(self.q) for xi, yi in self.positions]
-        mass = sp.zeros(n, n)
-        for j, k in itertools.product(range(n), repeat=2):
-            if k < j:
-                mass[j, k] = mass[k, j]
-                continue
-            entry = sum(m * (J[:, j].T * J[:, k])[0, 0] for m, J in zip(self.masses, jac))
-            entry = TR10i(sp.factor_terms(sp.expand(entry)))
-            entry = sp.expand(entry.subs(sp.sin(self.q[j]) ** 2, 1 - sp.cos(self.q[j]) ** 2))
-            mass[j, k] = sp.factor_terms(entry)
-        self.mass_matrix = mass
-        self.kinetic = sp.expand((self.omega.T * mass * self.omega)[0, 0] / 2)
-        self.potential = sp.expand(self.g * sum(m * yi for m, yi in zip(self.masses, ys)))
-        self.lagrangian = self.kinetic - self.potential
-
-        # Euler-Lagrange: d/dt dL/domega_i = dL/dq_i with
-        # d/dt dL/domega_i = sum_j d2L/domega_i dq_j omega_j + sum_j M_ij omega_j'.
-        dl_dq = sp.Matrix([self.lagrangian.diff(qi) for qi in self.q])
-        dl_dw = sp.Matrix([self.lagrangian.diff(wi) for wi in self.omega])
-        self.dlagrangian_dq = dl_dq
-        self.momenta = mass * self.omega
-        conservative = sp.expand(dl_dq - dl_dw.jacobian(self.q) * self.omega)
-
-        # Generalized forces. Joint i joins link i-1 (the pivot for i = 1) to
-        # link i; its damping torque -c_i (omega_i - omega_(i-1)) acts on link i
-        # and, reversed, on link i-1: Q = -dR/domega.
-        self.dissipation = sp.Integer(0)
-        self.generalized_forces = sp.zeros(n, 1)
         if forced:
             self.damping = sp.Matrix(sp.symbols(_names("c", n), nonnegative=True))
             self.drive_amplitude = sp.Symbol("A", real=True)
             self.drive_frequency = sp.Symbol("Omega", positive=True)
             self.parameters += (*self.damping, self.drive_amplitude, self.drive_frequency)
-            relative = [self.omega[i] - (self.omega[i - 1] if i else 0) for i in range(n)]
-            self.dissipation = sum(c * w**2 for c, w in zip(self.damping, relative)) / 2
-            drive = sp.zeros(n, 1)
-            drive[0] = self.drive_amplitude * sp.cos(self.drive_frequency * self.t)
-            self.generalized_forces = sp.expand(
-                drive - sp.Matrix([self.dissipation.diff(w) for w in self.omega])
-            )
-        self.forcing = sp.expand(conservative + self.generalized_forces)
+
+    # ---- the closed form, entry by entry ----------------------------------
+    def _require(self, part: str) -> None:
+        """Refuse ``part`` (a key of :data:`LIMITS`) beyond its number of links."""
+        limit, why = LIMITS[part]
+        if self.n > limit:
+            raise ValueError(f"{part[0].upper()}{part[1:]} of a chain of {self.n} links: refused "
+                             f"beyond {limit} links, because {why}")
+
+    def _rows(self, label: str):
+        """``range(n)``, with a progress bar for chains long enough to take seconds."""
+        if self.n < PROGRESS_LINKS:
+            return range(self.n)
+        from tqdm.auto import tqdm
+
+        return tqdm(range(self.n), desc=f"{label} of {self.n} links", unit="link",
+                    mininterval=0.5)
+
+    def _canonical(self, expr, form=sp.expand):
+        """``form(expr)`` for short chains (by default expanded, as the Lagrangian derivation
+        gives it); else ``expr`` as built: compact, and quick to make."""
+        return form(expr) if self.n <= EXPANDED_MAX_LINKS else expr
+
+    @functools.cached_property
+    def tail_masses(self) -> tuple:
+        self._require("the symbolic equations")
+        return tuple(sp.Add(*self.masses[i:]) for i in range(self.n))
+
+    @functools.cached_property
+    def _trig_differences(self) -> dict:
+        """``{(i, j): (cos(theta_i - theta_j), sin(theta_i - theta_j))}`` for ``i < j``.
+
+        Made unevaluated, in the sign SymPy's evaluation would choose: the
+        difference of the two angles whose first symbol sorts first (what
+        ``could_extract_minus_sign`` decides for a difference of two symbols,
+        checked by the tests). Evaluating would cost most of the build.
+        """
+        table = {}
+        keys = [sp.default_sort_key(angle) for angle in self.q]
+        for i in range(self.n):
+            for j in range(i + 1, self.n):
+                first, second, sign = (i, j, 1) if keys[i] < keys[j] else (j, i, -1)
+                angle = self.q[first] - self.q[second]
+                table[i, j] = sp.cos(angle, evaluate=False), sign * sp.sin(angle, evaluate=False)
+        return table
+
+    def _cos_difference(self, i: int, j: int):
+        return sp.Integer(1) if i == j else self._trig_differences[min(i, j), max(i, j)][0]
+
+    def _sin_difference(self, i: int, j: int):
+        """``sin(theta_i - theta_j)``."""
+        if i == j:
+            return sp.Integer(0)
+        sine = self._trig_differences[min(i, j), max(i, j)][1]
+        return sine if i < j else -sine
+
+    def _coupling(self, i: int, j: int):
+        """``mu_max(i,j) l_i l_j``: the coefficient of entry ``(i, j)`` of ``M``."""
+        return sp.Mul(self.tail_masses[max(i, j)], self.lengths[i], self.lengths[j])
+
+    @functools.cached_property
+    def mass_matrix(self) -> sp.Matrix:
+        """``M_ij = mu_max(i,j) l_i l_j cos(theta_i - theta_j)``, shape (n, n)."""
+        n = self.n
+        mass = sp.zeros(n, n)
+        for i in self._rows("mass matrix"):
+            for j in range(i, n):
+                mass[i, j] = mass[j, i] = sp.Mul(self._coupling(i, j), self._cos_difference(i, j))
+        return mass
+
+    @functools.cached_property
+    def positions(self) -> list:
+        """Cartesian bob positions ``[(x_i, y_i)]``, pivot at the origin, ``y`` pointing up."""
+        self._require("the symbolic equations")
+        xs = itertools.accumulate(li * sp.sin(qi) for qi, li in zip(self.q, self.lengths))
+        ys = itertools.accumulate(-li * sp.cos(qi) for qi, li in zip(self.q, self.lengths))
+        return list(zip(xs, ys))
+
+    @functools.cached_property
+    def potential(self) -> sp.Expr:
+        """``V = -g sum_i mu_i l_i cos(theta_i)``, zero at the pivot's height."""
+        return self._canonical(sp.Add(*(
+            -self.g * mu * li * sp.cos(qi)
+            for mu, li, qi in zip(self.tail_masses, self.lengths, self.q))))
+
+    @functools.cached_property
+    def kinetic(self) -> sp.Expr:
+        """``T = 1/2 omega^T M omega``."""
+        mass, w = self.mass_matrix, self.omega
+        terms = [mass[i, i] * w[i] ** 2 / 2 for i in range(self.n)]
+        terms += [mass[i, j] * w[i] * w[j] for i in range(self.n) for j in range(i + 1, self.n)]
+        return self._canonical(sp.Add(*terms))
+
+    @functools.cached_property
+    def lagrangian(self) -> sp.Expr:
+        return self.kinetic - self.potential
+
+    def _link_sum(self, i: int, weights) -> sp.Expr:
+        """``-sum_j mu_max(i,j) l_i l_j sin(theta_i - theta_j) weights_j
+        - g mu_i l_i sin(theta_i)``."""
+        terms = [-self._coupling(i, j) * self._sin_difference(i, j) * weights[j]
+                 for j in range(self.n) if j != i]
+        terms.append(-self.g * self.tail_masses[i] * self.lengths[i] * sp.sin(self.q[i]))
+        return sp.Add(*terms)
+
+    @functools.cached_property
+    def dlagrangian_dq(self) -> sp.Matrix:
+        """``dL/dtheta_i = -omega_i sum_j mu_max(i,j) l_i l_j sin(theta_i - theta_j) omega_j
+        - g mu_i l_i sin(theta_i)``."""
+        w = self.omega
+        return sp.Matrix([self._canonical(self._link_sum(i, [w[i] * wj for wj in w]))
+                          for i in self._rows("dL/dq")])
 
     @property
+    def momenta(self) -> sp.Matrix:
+        """``p = M(q) omega``."""
+        return self.mass_matrix * self.omega
+
+    @functools.cached_property
+    def dissipation(self) -> sp.Expr:
+        """Rayleigh's ``R = 1/2 sum_i c_i (omega_i - omega_(i-1))^2``; zero unless forced."""
+        if not self.forced:
+            return sp.Integer(0)
+        relative = [self.omega[i] - (self.omega[i - 1] if i else 0) for i in range(self.n)]
+        return sum(c * w**2 for c, w in zip(self.damping, relative)) / 2
+
+    @functools.cached_property
+    def generalized_forces(self) -> sp.Matrix:
+        """``Q = -C omega + (A cos(Omega t), 0, ..., 0)``; zero unless forced.
+
+        Joint ``i`` joins link ``i-1`` (the pivot for ``i = 1``) to link ``i``;
+        its damping torque ``-c_i (omega_i - omega_(i-1))`` acts on link ``i``
+        and, reversed, on link ``i-1``: entry ``i`` is
+        ``-c_i (omega_i - omega_(i-1)) + c_(i+1) (omega_(i+1) - omega_i)``
+        (:attr:`damping_matrix`), which is ``-dR/domega_i`` (Rayleigh's
+        :attr:`dissipation`, as :func:`lagrangian_derivation` computes it).
+        """
+        if not self.forced:
+            return sp.zeros(self.n, 1)
+        forces = -self.damping_matrix * self.omega
+        forces[0] += self.drive_amplitude * sp.cos(self.drive_frequency * self.t)
+        return forces.applyfunc(sp.expand)
+
+    @functools.cached_property
+    def forcing(self) -> sp.Matrix:
+        """``F_i + Q_i``: ``F_i = -sum_j mu_max(i,j) l_i l_j sin(theta_i - theta_j) omega_j^2
+        - g mu_i l_i sin(theta_i)``."""
+        squares = [w**2 for w in self.omega]
+        forces = self.generalized_forces
+        return sp.Matrix([self._canonical(self._link_sum(i, squares) + forces[i])
+                          for i in self._rows("forcing")])
+
+    @functools.cached_property
     def damping_matrix(self) -> sp.Matrix:
         """``C = d^2 R / domega^2``, shape (n, n): the damping force is ``-C omega``.
 
-        Tridiagonal, ``C_ii = c_i + c_(i+1)``, ``C_(i,i+1) = -c_(i+1)``; zero for
-        the conservative chain.
+        Tridiagonal, ``C_ii = c_i + c_(i+1)`` (no ``c_(n+1)``),
+        ``C_(i,i+1) = C_(i+1,i) = -c_(i+1)``; zero for the conservative chain.
         """
-        return sp.hessian(self.dissipation, list(self.omega)) if self.forced else sp.zeros(self.n)
+        n = self.n
+        damping = sp.zeros(n, n)
+        if not self.forced:
+            return damping
+        c = self.damping
+        for i in range(n):
+            damping[i, i] = c[i] + (c[i + 1] if i + 1 < n else 0)
+            if i + 1 < n:
+                damping[i, i + 1] = damping[i + 1, i] = -c[i + 1]
+        return damping
 
     # ---- derived on demand (these can be slow for n >= 3) ---------------------
     @property
@@ -241,7 +432,8 @@ class Chain:
 
     @functools.cached_property
     def accelerations(self) -> sp.Matrix:
-        """``omega' = M^-1 F`` in closed form (cheap for ``n <= 2``, large beyond)."""
+        """``omega' = M^-1 F`` in closed form (cheap for ``n <= 2``, refused beyond)."""
+        self._require("the closed-form accelerations")
         return self.mass_matrix.LUsolve(self.forcing).applyfunc(sp.cancel)
 
     @functools.cached_property
@@ -251,6 +443,7 @@ class Chain:
         Simplified for ``n <= 2`` only: beyond, simplification costs minutes
         and the numeric code never needs this matrix.
         """
+        self._require("the closed-form inverse mass matrix")
         inv = self.mass_matrix.adjugate() / self.mass_matrix.det()
         if self.n > 2:
             return inv
@@ -288,24 +481,51 @@ class Chain:
         With ``omega = 0`` the forcing vanishes exactly when every
         ``sin(theta_i) = 0``; the Jacobian there is ``[[0, I], [M^-1 dF/dq, 0]]``
         because ``F`` is quadratic in ``omega`` and zero at the equilibrium.
+        See :meth:`equilibrium` for one of them.
+        """
+        self._require("the list of all equilibria")
+        return [self._equilibrium(ups) for ups in itertools.product((False, True), repeat=self.n)]
+
+    def _equilibrium(self, ups: tuple) -> Equilibrium:
+        """The equilibrium with link ``i`` up where ``ups[i]``, built once per chain."""
+        found = self.__dict__.setdefault("_equilibria_found", {})
+        if ups not in found:
+            found[ups] = self._build_equilibrium(ups)
+        return found[ups]
+
+    def _build_equilibrium(self, ups: tuple) -> Equilibrium:
+        """The equilibrium with link ``i`` up where ``ups[i]``: ``M^-1 dF/dq`` in closed form.
+
+        There ``M = S Lambda B Lambda S`` with ``S = diag(cos theta_i) = diag(+-1)``,
+        ``Lambda = diag(l_i)`` and ``B_ij = mu_max(i,j)``, and
+        ``dF/dq = -g diag(mu_i l_i cos theta_i)``. ``B = U diag(m) U^T`` with
+        ``U`` the upper triangle of ones, so ``B^-1`` is tridiagonal:
+        ``(B^-1)_ii = 1/m_i + 1/m_(i-1)`` (no second term for ``i = 1``),
+        ``(B^-1)_(i,i+1) = -1/m_i``. No symbolic solve is needed.
         """
         if self.forced:
             raise ValueError(
                 "the equilibria are those of the unforced chain, derive_chain(n): with a drive "
                 "there are none, and damping only changes their Jacobians"
             )
-        n = self.n
-        result = []
-        for ups in itertools.product((False, True), repeat=n):
-            angles = tuple(sp.pi if up else sp.Integer(0) for up in ups)
-            at = dict(zip(self.q, angles)) | {w: 0 for w in self.omega}
-            mass = self.mass_matrix.subs(at)
-            stiffness = self.forcing.jacobian(self.q).subs(at)
-            ratio = mass.LUsolve(stiffness).applyfunc(sp.simplify)
-            jacobian = sp.BlockMatrix([[sp.zeros(n), sp.eye(n)], [ratio, sp.zeros(n)]])
-            name = "-".join("up" if up else "down" for up in ups)
-            result.append(Equilibrium(name, angles, sp.Matrix(jacobian), ratio))
-        return result
+        n, m, lengths = self.n, self.masses, self.lengths
+        signs = [-1 if up else 1 for up in ups]
+
+        def b_inverse(i, j):
+            if i == j:
+                return 1 / m[i] + (1 / m[i - 1] if i else 0)
+            return -1 / m[min(i, j)] if abs(i - j) == 1 else 0
+
+        ratio = sp.zeros(n, n)
+        for i in range(n):
+            for j in range(max(0, i - 1), min(n, i + 2)):
+                stiffness = -self.g * self.tail_masses[j] * lengths[j] * signs[j]
+                inverse_mass = signs[i] * signs[j] * b_inverse(i, j) / (lengths[i] * lengths[j])
+                ratio[i, j] = self._canonical(inverse_mass * stiffness, sp.factor)
+        jacobian = sp.BlockMatrix([[sp.zeros(n), sp.eye(n)], [ratio, sp.zeros(n)]])
+        angles = tuple(sp.pi if up else sp.Integer(0) for up in ups)
+        name = "-".join("up" if up else "down" for up in ups)
+        return Equilibrium(name, angles, sp.Matrix(jacobian), ratio)
 
     def equilibrium(self, name: str) -> Equilibrium:
         """The equilibrium called ``name`` (``"down"``, ``"up-down"``, ...).
@@ -315,21 +535,105 @@ class Chain:
         >>> derive_chain(2).equilibrium("down-up").angles
         (0, pi)
         """
-        names = [eq.name for eq in self.equilibria]
-        if name not in names:
-            raise ValueError(f"`equilibrium` must be one of {names}, got {name!r}")
-        return self.equilibria[names.index(name)]
+        words = name.split("-") if isinstance(name, str) else []
+        if len(words) != self.n or not set(words) <= {"down", "up"}:
+            example = "-".join(["down"] * self.n)
+            raise ValueError(f"`equilibrium` must be one of the 2**{self.n} names that call each "
+                             f"of the {self.n} links 'down' or 'up', joined by '-' (such as "
+                             f"{example!r}), got {name!r}")
+        return self._equilibrium(tuple(word == "up" for word in words))
 
     def jacobian(self) -> sp.Matrix:
         """Jacobian of ``(omega, M^-1 F)`` with respect to ``(theta, omega)``.
 
-        Uses the closed-form accelerations, so it is meant for ``n <= 2``.
+        Uses the closed-form accelerations, so it is refused beyond ``n = 2``;
+        :meth:`pendulum_lab.PendulumModel.jacobian` evaluates it numerically
+        for any chain.
         """
+        self._require("the closed-form Jacobian")
         rhs = sp.Matrix([*self.omega, *self.accelerations])
         return rhs.jacobian(sp.Matrix([*self.q, *self.omega]))
 
     def __repr__(self) -> str:
         return f"Chain(n={self.n}, forced=True)" if self.forced else f"Chain(n={self.n})"
+
+
+@dataclass(frozen=True)
+class LagrangianDerivation:
+    """A chain's equations derived the long way (see :func:`lagrangian_derivation`).
+
+    Attributes
+    ----------
+    kinetic, potential : sympy.Expr
+    mass_matrix : sympy.Matrix, shape (n, n)
+    dlagrangian_dq, generalized_forces, forcing : sympy.Matrix, shape (n, 1)
+    """
+
+    kinetic: sp.Expr
+    potential: sp.Expr
+    mass_matrix: sp.Matrix
+    dlagrangian_dq: sp.Matrix
+    generalized_forces: sp.Matrix
+    forcing: sp.Matrix
+
+
+def lagrangian_derivation(chain: Chain) -> LagrangianDerivation:
+    """Derive ``chain``'s equations from the Cartesian bob positions, term by term.
+
+    ``T = 1/2 sum_i m_i |v_i|^2`` with ``v_i = J_i omega`` gives
+    ``M = sum_i m_i J_i^T J_i``; each entry, a short sum of
+    ``cos(theta_j) cos(theta_k) + sin(theta_j) sin(theta_k)`` terms, is folded
+    into ``cos(theta_j - theta_k)`` by the targeted rule TR10i. Then
+    ``L = T - V`` and the Euler-Lagrange equations
+    ``d/dt dL/domega_i = dL/dq_i``, with
+    ``d/dt dL/domega_i = sum_j d2L/domega_i dq_j omega_j + sum_j M_ij omega_j'``,
+    give the forcing, plus the generalized forces ``-dR/domega`` of Rayleigh's
+    dissipation function of the joints and the drive. This is how the
+    course derives the equations by hand; the closed form :class:`Chain`
+    builds must agree with it (the tests assert so for ``n <= 5``, exactly,
+    with :func:`is_identically_zero`). It expands everything, so it is
+    refused for long chains (:data:`LIMITS`).
+
+    Examples
+    --------
+    >>> chain = derive_chain(2)
+    >>> long_way = lagrangian_derivation(chain)
+    >>> long_way.mass_matrix == chain.mass_matrix, long_way.forcing == chain.forcing
+    (True, True)
+    """
+    chain._require("the Lagrangian derivation")
+    n, q, w = chain.n, chain.q, chain.omega
+    x, y, xs, ys = sp.Integer(0), sp.Integer(0), [], []
+    for qi, li in zip(q, chain.lengths):
+        x, y = x + li * sp.sin(qi), y - li * sp.cos(qi)
+        xs.append(x)
+        ys.append(y)
+    jac = [sp.Matrix([[xi], [yi]]).jacobian(q) for xi, yi in zip(xs, ys)]
+    mass = sp.zeros(n, n)
+    for j, k in itertools.product(range(n), repeat=2):
+        if k < j:
+            mass[j, k] = mass[k, j]
+            continue
+        entry = sum(m * (J[:, j].T * J[:, k])[0, 0] for m, J in zip(chain.masses, jac))
+        entry = TR10i(sp.factor_terms(sp.expand(entry)))
+        entry = sp.expand(entry.subs(sp.sin(q[j]) ** 2, 1 - sp.cos(q[j]) ** 2))
+        mass[j, k] = sp.factor_terms(entry)
+    kinetic = sp.expand((w.T * mass * w)[0, 0] / 2)
+    potential = sp.expand(chain.g * sum(m * yi for m, yi in zip(chain.masses, ys)))
+    lagrangian = kinetic - potential
+    dl_dq = sp.Matrix([lagrangian.diff(qi) for qi in q])
+    dl_dw = sp.Matrix([lagrangian.diff(wi) for wi in w])
+    conservative = sp.expand(dl_dq - dl_dw.jacobian(q) * w)
+    # Forces without a potential: Rayleigh's dissipation function of the joints'
+    # relative angular velocities, and the drive torque on the first link.
+    forces = sp.zeros(n, 1)
+    if chain.forced:
+        relative = [w[i] - (w[i - 1] if i else 0) for i in range(n)]
+        dissipation = sum(c * v**2 for c, v in zip(chain.damping, relative)) / 2
+        forces = -sp.Matrix([dissipation.diff(wi) for wi in w])
+        forces[0] += chain.drive_amplitude * sp.cos(chain.drive_frequency * chain.t)
+    forcing = sp.expand(conservative + forces)
+    return LagrangianDerivation(kinetic, potential, mass, dl_dq, sp.expand(forces), forcing)
 
 
 def is_identically_zero(expr: sp.Expr) -> bool:

@@ -26,6 +26,19 @@ from .mechanics import Chain, derive_chain
 
 __all__ = ["PendulumModel", "double_pendulum", "driven_pendulum", "n_pendulum", "simple_pendulum"]
 
+#: Chains up to this many links are evaluated from their SymPy expressions,
+#: unrolled (lambdified here, printed as kernels by :mod:`pendulum_lab.codegen`);
+#: longer ones link by link, from the closed form (:mod:`pendulum_lab.long_chains`),
+#: which is the faster from three links on and needs no code generated per chain.
+UNROLLED_MAX_LINKS = 2
+#: The longest chain a numeric model accepts, and why (measured on unit chains).
+MAX_LINKS = 1000
+MAX_LINKS_REASON = (
+    "longer chains are untested: the mass matrix's condition number grows like n^2 (1.6e6 at "
+    "1000 links, where the linear-time solve already loses 5e-12 against a dense one) and its "
+    "fastest normal mode like sqrt(n) (about 200 rad/s at 1000 unit links), so the steps an "
+    "integrator needs shrink with n")
+
 
 def _lambdify(args, exprs, shape):
     """Lambdify a list of expressions into one function returning shape ``(..., *shape)``.
@@ -44,8 +57,23 @@ def _lambdify(args, exprs, shape):
     return evaluate
 
 
+def _state(theta, other, params) -> tuple:
+    """Arguments of a lambdified state function: each angle, each velocity, each parameter."""
+    return (*np.moveaxis(np.asarray(theta, float), -1, 0),
+            *np.moveaxis(np.asarray(other, float), -1, 0), *params)
+
+
+def _config(theta, params) -> tuple:
+    return (*np.moveaxis(np.asarray(theta, float), -1, 0), *params)
+
+
 class _CompiledChain:
-    """The lambdified functions of one :class:`~pendulum_lab.mechanics.Chain`."""
+    """The lambdified functions of one :class:`~pendulum_lab.mechanics.Chain` (a short one).
+
+    Each method takes states of shape ``(..., n)`` and ``params`` in the order
+    of ``Chain.parameters``; :class:`~pendulum_lab.long_chains.LoopedChain`
+    has the same methods for long chains.
+    """
 
     def __init__(self, chain: Chain):
         n, q, w = chain.n, list(chain.q), list(chain.omega)
@@ -53,24 +81,69 @@ class _CompiledChain:
         config_args = (*q, *chain.parameters)
         lag_dq = chain.dlagrangian_dq
         lag_dw = sp.Matrix([chain.lagrangian.diff(wi) for wi in w])
-        self.mass_matrix = _lambdify(config_args, chain.mass_matrix, (n, n))
+        self._mass_matrix = _lambdify(config_args, chain.mass_matrix, (n, n))
         # The time comes last; the conservative forcing does not use it.
-        self.forcing = _lambdify((*state_args, chain.t), chain.forcing, (n,))
-        self.generalized_forces = _lambdify((*state_args, chain.t), chain.generalized_forces, (n,))
-        self.damping_matrix = _lambdify(chain.parameters, chain.damping_matrix, (n, n))
-        self.dlagrangian_dq = _lambdify(state_args, lag_dq, (n,))
-        self.kinetic = _lambdify(state_args, [chain.kinetic], ())
-        self.potential = _lambdify(config_args, [chain.potential], ())
+        self._forcing = _lambdify((*state_args, chain.t), chain.forcing, (n,))
+        self._generalized_forces = _lambdify((*state_args, chain.t), chain.generalized_forces,
+                                             (n,))
+        self._damping_matrix = _lambdify(chain.parameters, chain.damping_matrix, (n, n))
+        self._dlagrangian_dq = _lambdify(state_args, lag_dq, (n,))
+        self._kinetic = _lambdify(state_args, [chain.kinetic], ())
+        self._potential = _lambdify(config_args, [chain.potential], ())
         # Pieces of the Jacobian of Hamilton's equations, all written in (q, omega):
         # d2L/dq2, d2L/dq domega and d(M omega)/dq; no symbolic inverse of M needed.
-        self.lag_qq = _lambdify(state_args, lag_dq.jacobian(q), (n, n))
-        self.lag_qw = _lambdify(state_args, lag_dq.jacobian(w), (n, n))
-        self.dmomenta_dq = _lambdify(state_args, lag_dw.jacobian(q), (n, n))
+        self._lag_qq = _lambdify(state_args, lag_dq.jacobian(q), (n, n))
+        self._lag_qw = _lambdify(state_args, lag_dq.jacobian(w), (n, n))
+        self._dmomenta_dq = _lambdify(state_args, lag_dw.jacobian(q), (n, n))
         self.separable = not (chain.mass_matrix.free_symbols & set(q))
+
+    def mass_matrix(self, theta, params):
+        return self._mass_matrix(*_config(theta, params))
+
+    def velocities(self, theta, p, params):
+        return solve_small(self.mass_matrix(theta, params), np.asarray(p, float))
+
+    def momenta(self, theta, omega, params):
+        return np.einsum("...ij,...j->...i", self.mass_matrix(theta, params), omega)
+
+    def dlagrangian_dq(self, theta, omega, params):
+        return self._dlagrangian_dq(*_state(theta, omega, params))
+
+    def forcing(self, theta, omega, params, t):
+        return self._forcing(*_state(theta, omega, params), t)
+
+    def accelerations(self, theta, omega, params, t):
+        return solve_small(self.mass_matrix(theta, params), self.forcing(theta, omega, params, t))
+
+    def generalized_forces(self, theta, omega, params, t):
+        return self._generalized_forces(*_state(theta, omega, params), t)
+
+    def kinetic(self, theta, omega, params):
+        return self._kinetic(*_state(theta, omega, params))
+
+    def potential(self, theta, params):
+        return self._potential(*_config(theta, params))
+
+    def damping_matrix(self, params):
+        return self._damping_matrix(*params)
+
+    def lag_qq(self, theta, omega, params):
+        return self._lag_qq(*_state(theta, omega, params))
+
+    def lag_qw(self, theta, omega, params):
+        return self._lag_qw(*_state(theta, omega, params))
+
+    def dmomenta_dq(self, theta, omega, params):
+        return self._dmomenta_dq(*_state(theta, omega, params))
 
 
 @functools.cache
-def _compiled(n: int, forced: bool) -> _CompiledChain:
+def _compiled(n: int, forced: bool):
+    """The numeric functions of ``n`` links: lambdified for short chains, looped for long ones."""
+    if n > UNROLLED_MAX_LINKS:
+        from .long_chains import LoopedChain  # compiles (once per machine) on first use
+
+        return LoopedChain(n, forced)
     return _CompiledChain(derive_chain(n, forced))
 
 
@@ -134,6 +207,9 @@ class PendulumModel:
     def __init__(self, n: int, masses, lengths, g: float, *, damping=0.0,
                  drive_amplitude: float = 0.0, drive_frequency: float | None = None):
         self.n = check.integer_at_least("n", n, 1)
+        if self.n > MAX_LINKS:
+            raise ValueError(f"`n` must be at most {MAX_LINKS} links, got {self.n}: "
+                             f"{MAX_LINKS_REASON}")
         self.masses = check.positive_vector("masses", masses, self.n)
         self.lengths = check.positive_vector("lengths", lengths, self.n)
         self.g = check.real_number("g", g)
@@ -203,14 +279,22 @@ class PendulumModel:
         >>> pl.driven_pendulum().replace(drive_amplitude=1.5).drive_amplitude
         1.5
         """
-        arguments = dict(masses=self.masses, lengths=self.lengths, g=self.g,
-                         damping=self.damping, drive_amplitude=self.drive_amplitude,
-                         drive_frequency=self.drive_frequency)
+        arguments = self._arguments()
         unknown = set(changes) - set(arguments)
         if unknown:
             raise ValueError(f"cannot replace {sorted(unknown)}: the arguments are "
                              f"{list(arguments)}")
         return PendulumModel(self.n, **(arguments | changes))
+
+    def _arguments(self) -> dict:
+        """The constructor's arguments after ``n``."""
+        return dict(masses=self.masses, lengths=self.lengths, g=self.g, damping=self.damping,
+                    drive_amplitude=self.drive_amplitude, drive_frequency=self.drive_frequency)
+
+    def __reduce__(self):
+        # Pickled as its constructor call (for Dask workers, see pendulum_lab.cluster): the
+        # compiled functions it holds cannot be pickled, and a worker builds its own.
+        return functools.partial(PendulumModel, self.n, **self._arguments()), ()
 
     def family(self, **values):
         """Copies of this model, one per entry of an array of parameter values.
@@ -277,13 +361,6 @@ class PendulumModel:
         return self._fn.separable
 
     # ---- numeric functions -------------------------------------------------
-    def _state(self, theta, other):
-        return (*np.moveaxis(np.asarray(theta, float), -1, 0),
-                *np.moveaxis(np.asarray(other, float), -1, 0), *self._params)
-
-    def _config(self, theta):
-        return (*np.moveaxis(np.asarray(theta, float), -1, 0), *self._params)
-
     def _time(self, t):
         """``t`` as floats; it may be left out only when the equations do not depend on it."""
         if t is None:
@@ -298,7 +375,7 @@ class PendulumModel:
 
     def mass_matrix_at(self, theta) -> np.ndarray:
         """``M(theta)``, shape ``(..., n, n)``."""
-        return self._fn.mass_matrix(*self._config(theta))
+        return self._fn.mass_matrix(theta, self._params)
 
     def accelerations(self, theta, omega, t=None) -> np.ndarray:
         """``omega' = M(theta)^-1 (F(theta, omega) + Q(omega, t))``, shape ``(..., n)``.
@@ -306,12 +383,11 @@ class PendulumModel:
         ``t`` (a float, or an array of the batch shape ``...``) is needed for a
         driven model only.
         """
-        forcing = self._fn.forcing(*self._state(theta, omega), self._time(t))
-        return solve_small(self.mass_matrix_at(theta), forcing)
+        return self._fn.accelerations(theta, omega, self._params, self._time(t))
 
     def generalized_forces(self, theta, omega, t=None) -> np.ndarray:
         """``Q(omega, t)``: joint damping and drive torques, shape ``(..., n)``; 0 if unforced."""
-        return self._fn.generalized_forces(*self._state(theta, omega), self._time(t))
+        return self._fn.generalized_forces(theta, omega, self._params, self._time(t))
 
     def vector_field(self, theta, p, t=None) -> tuple[np.ndarray, np.ndarray]:
         """``(dtheta/dt, dp/dt) = (dH/dp, -dH/dq + Q)`` in canonical variables, each ``(..., n)``.
@@ -320,24 +396,23 @@ class PendulumModel:
         compute the same). ``t`` is needed for a driven model only.
         """
         omega = self.velocities(theta, p)
-        args = self._state(theta, omega)
-        return omega, self._fn.dlagrangian_dq(*args) + self._fn.generalized_forces(
-            *args, self._time(t))
+        return omega, (self._fn.dlagrangian_dq(theta, omega, self._params)
+                       + self._fn.generalized_forces(theta, omega, self._params, self._time(t)))
 
     def momenta(self, theta, omega) -> np.ndarray:
         """``p = M(theta) omega``."""
-        return np.einsum("...ij,...j->...i", self.mass_matrix_at(theta), omega)
+        return self._fn.momenta(theta, omega, self._params)
 
     def velocities(self, theta, p) -> np.ndarray:
         """``omega = M(theta)^-1 p`` (this is ``dH/dp``)."""
-        return solve_small(self.mass_matrix_at(theta), np.asarray(p, float))
+        return self._fn.velocities(theta, p, self._params)
 
     def kinetic_energy(self, theta, omega) -> np.ndarray:
-        return self._fn.kinetic(*self._state(theta, omega))
+        return self._fn.kinetic(theta, omega, self._params)
 
     def potential_energy(self, theta) -> np.ndarray:
         """Potential energy, zero at the pivot's height."""
-        return self._fn.potential(*self._config(theta))
+        return self._fn.potential(theta, self._params)
 
     def energy(self, theta, omega) -> np.ndarray:
         return self.kinetic_energy(theta, omega) + self.potential_energy(theta)
@@ -350,7 +425,7 @@ class PendulumModel:
         return self.velocities(theta, p)
 
     def dH_dq(self, theta, p) -> np.ndarray:
-        return -self._fn.dlagrangian_dq(*self._state(theta, self.velocities(theta, p)))
+        return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p), self._params)
 
     def hamiltonian_value(self, theta, p) -> np.ndarray:
         """``H(theta, p)`` evaluated numerically."""
@@ -368,12 +443,12 @@ class PendulumModel:
         theta = np.asarray(theta, float)
         mass = self.mass_matrix_at(theta)
         omega = solve_small(mass, np.asarray(p, float))
-        args = self._state(theta, omega)
+        args = (theta, omega, self._params)
         inv_mass = np.linalg.inv(mass)
         dw_dq = -inv_mass @ self._fn.dmomenta_dq(*args)
         rate_w = self._fn.lag_qw(*args)  # d(dp/dt)/d omega
         if not self.is_conservative:
-            rate_w = rate_w - self._fn.damping_matrix(*self._params)
+            rate_w = rate_w - self._fn.damping_matrix(self._params)
         top = np.concatenate([dw_dq, inv_mass], axis=-1)
         bottom = np.concatenate([self._fn.lag_qq(*args) + rate_w @ dw_dq, rate_w @ inv_mass], -1)
         return np.concatenate([top, bottom], axis=-2)

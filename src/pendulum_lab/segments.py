@@ -39,7 +39,7 @@ from . import _validation as check
 from .model import PendulumModel
 from .simulate import Trajectory, progress_bar, run_arguments, simulate, to_method_variables
 
-__all__ = ["SegmentedRun", "segment_length", "simulate_segments"]
+__all__ = ["SegmentedRun", "default_segment_steps", "segment_length", "simulate_segments"]
 
 # Largest number of floats one segment may hold (about 16 MB).
 SEGMENT_FLOATS = 1 << 21
@@ -72,6 +72,20 @@ def segment_length(n_steps: int, floats_per_step: int, multiple: int = 1) -> int
     length = min(length, max(multiple, SEGMENT_FLOATS // max(1, floats_per_step)))
     length = multiple * max(1, math.ceil(length / multiple))
     return min(length, n_steps)
+
+
+def default_segment_steps(n: int, members: int, n_steps: int, save_every: int) -> int:
+    """Steps per segment of :func:`simulate_segments` for ``members`` states of ``n`` links.
+
+    A caller that cuts a batch into chunks (:mod:`pendulum_lab.cluster`) and
+    wants every chunk to run in the segments of the whole batch passes this,
+    computed for the whole batch, as ``segment_steps``: a driven model's
+    time at a step is rounded from the segment's start, so the segments must
+    not depend on the chunk.
+    """
+    # A kept state costs about four floats per link and member (angles and
+    # momenta, while stepping and in the segment handed out).
+    return segment_length(n_steps, 4 * n * members // save_every, save_every)
 
 
 class SegmentedRun:
@@ -246,11 +260,9 @@ def simulate_segments(
     method, theta0, start, (t_end, dt, n_steps), save_every, t0 = run_arguments(
         model, theta0, omega0, p0, t_end, dt, method, save_every, t0
     )
-    members = max(1, theta0.size // model.n)
     if segment_steps is None:
-        # A kept state costs about four floats per link and member (angles and
-        # momenta, while stepping and in the segment handed out).
-        segment_steps = segment_length(n_steps, 4 * model.n * members // save_every, save_every)
+        segment_steps = default_segment_steps(model.n, max(1, theta0.size // model.n), n_steps,
+                                              save_every)
     else:
         segment_steps = check.integer_at_least("segment_steps", segment_steps, 1)
         if segment_steps % save_every:

@@ -35,9 +35,10 @@ class ChainCost:
         (``sympy.count_ops``): the size of the equations, the same on every
         computer, unlike the times.
     derivation : float
-        Seconds for a fresh symbolic derivation (:class:`~pendulum_lab.Chain`).
+        Seconds for a fresh symbolic derivation of the mass matrix and the
+        forcing (:class:`~pendulum_lab.Chain`).
     build : float
-        Seconds for :func:`~pendulum_lab.n_pendulum` (compiles the numeric
+        Seconds for :func:`~pendulum_lab.n_pendulum` (prepares the numeric
         functions the first time ``n`` is used in a session, then reuses them).
     first_simulation : float
         Seconds of the first :func:`~pendulum_lab.simulate` call after building.
@@ -95,6 +96,7 @@ def chain_costs(
         clear_cache()  # SymPy's own cache would make a repeated derivation look cheap
         start = time.perf_counter()
         chain = Chain(n)
+        _ = chain.mass_matrix, chain.forcing  # built on first access, entry by entry
         derivation = time.perf_counter() - start
         operations = int(count_ops([*chain.mass_matrix, *chain.forcing]))
         start = time.perf_counter()

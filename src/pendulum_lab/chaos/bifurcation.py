@@ -28,11 +28,20 @@ import numpy as np
 
 from .. import _validation as check
 from .._angles import wrap_angle
+from ..cluster import check_client, map_members, portable_method
 from ..family import FAMILY_PARAMETERS
+from ..integrators import get_method
 from ..model import PendulumModel
+from ..segments import default_segment_steps
 from .stroboscopic import PERIOD_TOLERANCE, orbit_periods, stroboscopic_section
 
-__all__ = ["BifurcationDiagram", "PeriodDoubling", "PeriodWindow", "bifurcation_diagram"]
+__all__ = [
+    "BifurcationDiagram",
+    "PeriodDoubling",
+    "PeriodWindow",
+    "bifurcation_diagram",
+    "bifurcation_samples",
+]
 
 #: Default of :meth:`BifurcationDiagram.doublings`: how far (max-norm in wrapped
 #: theta [rad] and omega [rad/s]) a doubled orbit's points may lie from the old ones.
@@ -248,6 +257,8 @@ def bifurcation_diagram(
     tolerance: float = PERIOD_TOLERANCE,
     max_period: int = 16,
     progress: bool | None = None,
+    client=None,
+    chunk_size: int | None = None,
 ) -> BifurcationDiagram:
     """The stroboscopic section of a driven pendulum against one of its parameters.
 
@@ -278,6 +289,12 @@ def bifurcation_diagram(
     tolerance, max_period
         Of the period detection (:func:`~pendulum_lab.chaos.orbit_periods`).
     progress : bool, optional
+    client : dask.distributed.Client, optional
+        Integrate the values on this Dask cluster, in chunks
+        (:func:`pendulum_lab.cluster.map_members`); the diagram is the same,
+        bit for bit, as without it.
+    chunk_size : int, optional
+        Values per chunk on a cluster (by default a few chunks per worker).
 
     Returns
     -------
@@ -303,22 +320,56 @@ def bifurcation_diagram(
     if n_periods < 2 * max_period:
         raise ValueError(f"`n_periods` must be at least 2 max_period = {2 * max_period} to tell "
                          f"periods up to `max_period`, got {n_periods}")
+    transient_periods = check.integer_at_least("transient_periods", transient_periods, 0)
+    steps_per_period = check.integer_at_least("steps_per_period", steps_per_period, 1)
     theta0, omega0 = _starts(model, theta0, omega0)
     if parameter == "drive_frequency":
         family, ratio = _common_period_family(model, values)
     else:
         family, ratio = model.family(**{parameter: values}), np.ones_like(values)
-    shape = (len(values), len(theta0), model.n)
-    scale = ratio[:, None, None]  # velocities in the family's time are r times the real ones
+    method = get_method(method)
+    client = check_client(client)
+    # The segments of the whole batch, for every chunk of it (see default_segment_steps).
+    segment_steps = default_segment_steps(model.n, len(values) * len(theta0),
+                                          (transient_periods + n_periods) * steps_per_period,
+                                          steps_per_period)
     start = time.perf_counter()
+    theta, omega, turns = map_members(
+        bifurcation_samples, (np.arange(len(values)),), client=client, chunk_size=chunk_size,
+        label="bifurcation diagram", progress=progress,
+        args=(family, ratio, theta0, omega0, n_periods, transient_periods, steps_per_period,
+              portable_method(method, client), segment_steps,
+              progress if client is None else False))
+    theta, omega = np.moveaxis(theta, 0, 1), np.moveaxis(omega, 0, 1)
+    periods = orbit_periods(theta, omega, tolerance, max_period)
+    return BifurcationDiagram(parameter, values, theta, omega, periods, turns, tolerance,
+                              max_period, variable, link, method.name,
+                              time.perf_counter() - start)
+
+
+def bifurcation_samples(rows, family, ratio, theta0, omega0, n_periods: int,
+                        transient_periods: int, steps_per_period: int, method,
+                        segment_steps: int, progress: bool | None = None) -> tuple:
+    """The stroboscopic samples of the values ``rows`` of a bifurcation diagram.
+
+    The work of :func:`bifurcation_diagram` (arguments validated there) on
+    the members ``rows`` of ``family`` (time rescaled by ``ratio``), here or
+    on a Dask worker (:func:`pendulum_lab.cluster.map_members`).
+
+    Returns
+    -------
+    theta, omega : ndarray, shape (R, S, B, n)
+        Wrapped angles and velocities (in real time), the values first.
+    turns : ndarray, shape (R, B, n)
+    """
+    family, scale = family.select(rows), ratio[rows][:, None, None]
+    shape = (len(rows), len(theta0), theta0.shape[-1])
     section = stroboscopic_section(
         family.select((slice(None), None)), np.broadcast_to(theta0, shape),
         np.broadcast_to(omega0, shape) * scale, n_periods=n_periods,
         transient_periods=transient_periods, steps_per_period=steps_per_period, method=method,
-        progress=progress,
+        progress=progress, segment_steps=segment_steps,
     )
-    omega = section.omega / scale
-    periods = orbit_periods(section.theta, omega, tolerance, max_period)
-    return BifurcationDiagram(parameter, values, section.theta, omega, periods, section.turns,
-                              tolerance, max_period, variable, link, section.method,
-                              time.perf_counter() - start)
+    # Velocities in the family's time are r times the real ones.
+    return (np.moveaxis(section.theta, 1, 0), np.moveaxis(section.omega / scale, 1, 0),
+            section.turns)

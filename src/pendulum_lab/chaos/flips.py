@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _validation as check
+from ..cluster import check_client, map_members, portable_method
 from ..events import find_crossings
 from ..integrators import get_method
 from ..model import PendulumModel
@@ -20,7 +21,7 @@ from ..segments import simulate_segments
 from ..simulate import time_grid
 from ._common import require_finite
 
-__all__ = ["FlipMap", "can_flip", "flip_time_map"]
+__all__ = ["FlipMap", "can_flip", "flip_time_map", "flip_times"]
 
 
 def can_flip(model: PendulumModel, theta, omega=None) -> np.ndarray:
@@ -123,6 +124,8 @@ def flip_time_map(
     method="rk4",
     half_width: float = 3.0,
     progress: bool | None = None,
+    client=None,
+    chunk_size: int | None = None,
 ) -> FlipMap:
     """Heyl's flip-time map: time until either arm passes over the top.
 
@@ -149,6 +152,12 @@ def flip_time_map(
     half_width : float
         The grid covers ``[-half_width, half_width]^2``, ``0 < half_width < pi``.
     progress : bool, optional
+    client : dask.distributed.Client, optional
+        Integrate the cells on this Dask cluster, in chunks
+        (:func:`pendulum_lab.cluster.map_members`); the map is the same, bit
+        for bit, as without it.
+    chunk_size : int, optional
+        Cells per chunk on a cluster (by default a few chunks per worker).
 
     Returns
     -------
@@ -190,22 +199,52 @@ def flip_time_map(
     cells = np.flatnonzero(~forbidden)
     theta = grid.reshape(-1, 2)[cells]
     method = get_method(method)
+    client = check_client(client)
     start = time.perf_counter()
-    if cells.size:
-        run = simulate_segments(model, theta, np.zeros_like(theta), t_end=t_end, dt=dt,
-                                method=method, progress=progress, label="flip-time map")
-        for segment in run:
-            require_finite(segment, "flip_time_map")
-            # An arm flips when the larger |theta_i| passes pi (upwards).
-            height = np.max(np.abs(segment.theta), axis=-1)
-            flips = find_crossings(height, direction=1, level=np.pi).first()
-            flip.flat[cells[run.members[flips.member]]] = (
-                segment.t[0] + (flips.step + flips.fraction()) * dt
-            )
-            # Cells that have flipped leave the ensemble.
-            stay = np.ones(len(run.members), dtype=bool)
-            stay[flips.member] = False
-            run.keep(stay)
+    flip.flat[cells] = map_members(
+        flip_times, (theta,), client=client, chunk_size=chunk_size, label="flip-time map",
+        progress=progress,
+        args=(model, t_end, dt, portable_method(method, client),
+              progress if client is None else False))
     return FlipMap(
         theta1, theta2, flip, forbidden, t_end, dt, method.name, time.perf_counter() - start
     )
+
+
+def flip_times(theta, model: PendulumModel, t_end: float, dt: float, method,
+               progress: bool | None = None) -> np.ndarray:
+    """Flip time of each state released at rest, ``inf`` if none before ``t_end``.
+
+    The work of :func:`flip_time_map` on a batch of cells, here or on a Dask
+    worker (:func:`pendulum_lab.cluster.map_members`).
+
+    Parameters
+    ----------
+    theta : ndarray, shape (K, 2)
+    model, t_end, dt, method, progress
+        As for :func:`flip_time_map` (validated there).
+
+    Returns
+    -------
+    ndarray, shape (K,)
+    """
+    flip = np.full(len(theta), np.inf)
+    if not len(theta):
+        return flip
+    run = simulate_segments(model, theta, np.zeros_like(theta), t_end=t_end, dt=dt,
+                            method=method, progress=progress, label="flip-time map")
+    first_step = 0
+    for segment in run:
+        require_finite(segment, "flip_time_map")
+        # An arm flips when the larger |theta_i| passes pi (upwards).
+        height = np.max(np.abs(segment.theta), axis=-1)
+        flips = find_crossings(height, direction=1, level=np.pi).first()
+        # Counted in steps from the start: segments end where the batch's size puts them,
+        # and the time must not depend on that (a chunk of the batch gives the same).
+        flip[run.members[flips.member]] = (first_step + flips.step + flips.fraction()) * dt
+        first_step += len(segment.t) - 1
+        # Cells that have flipped leave the ensemble.
+        stay = np.ones(len(run.members), dtype=bool)
+        stay[flips.member] = False
+        run.keep(stay)
+    return flip

@@ -31,7 +31,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import _validation as check
+from ..cluster import check_client, map_members, members_of, portable_method
 from ..events import hermite
+from ..integrators import get_method
 from ..model import PendulumModel
 from ..segments import segment_length, simulate_segments
 from ..simulate import Trajectory, canonical_state, time_grid
@@ -45,6 +47,7 @@ __all__ = [
     "EnergyLyapunov",
     "LyapunovEstimate",
     "LyapunovSpectrum",
+    "benettin_running",
     "lyapunov_benettin",
     "lyapunov_by_energy",
     "lyapunov_spectrum",
@@ -146,6 +149,8 @@ def lyapunov_benettin(
     renormalize_every: int = 50,
     seed=0,
     progress: bool | None = None,
+    client=None,
+    chunk_size: int | None = None,
 ) -> LyapunovEstimate:
     """Largest Lyapunov exponent by Benettin's two-trajectory method.
 
@@ -175,7 +180,14 @@ def lyapunov_benettin(
     renormalize_every : int
         Steps between renormalisations, ``>= 1``.
     seed : int or None
-        Seed of the initial perturbation direction.
+        Seed of the initial perturbation direction (one direction for every
+        member of an ensemble).
+    client : dask.distributed.Client, optional
+        Integrate an ensemble (a Lyapunov map) on this Dask cluster, in
+        chunks of members (:func:`pendulum_lab.cluster.map_members`); the
+        estimates are the same, bit for bit, as without it.
+    chunk_size : int, optional
+        Members per chunk on a cluster (by default a few chunks per worker).
 
     Returns
     -------
@@ -202,6 +214,30 @@ def lyapunov_benettin(
         model, theta0, omega0, p0, t_end, dt, "renormalize_every", renormalize_every
     )
     delta = check.positive_number("delta", delta)
+    method = get_method(method)
+    client = check_client(client)
+    start = time.perf_counter()
+    running = map_members(
+        benettin_running, (theta0, p0, np.arange(len(theta0))), client=client,
+        chunk_size=chunk_size, label="Benettin", progress=progress,
+        args=(model, dt, every, intervals, portable_method(method, client), delta, seed, t0,
+              progress if client is None else False))
+    t = (np.arange(intervals) + 1) * every * dt
+    return LyapunovEstimate(t, running.T.reshape(intervals, *batch), "benettin", method.name,
+                            dt, time.perf_counter() - start)
+
+
+def benettin_running(theta0, p0, rows, model: PendulumModel, dt: float, every: int,
+                     intervals: int, method, delta: float, seed, t0: float = 0.0,
+                     progress: bool | None = None) -> np.ndarray:
+    """Benettin's running estimates of a batch of states, shape ``(K, intervals)``.
+
+    The work of :func:`lyapunov_benettin` (arguments validated there) on
+    states ``theta0, p0`` of shape ``(K, n)``, rows ``rows`` of the whole
+    flattened batch (a family's members are taken there), here or on a Dask
+    worker (:func:`pendulum_lab.cluster.map_members`).
+    """
+    model = members_of(model, rows)
     members = len(theta0)
     q_cmp, p_cmp = perturbed(theta0, p0, delta, seed)
     # Shape (2, K, n): the references, then their companions (a family's
@@ -213,21 +249,18 @@ def lyapunov_benettin(
     )
     companion = np.arange(2 * members) >= members
     log_sum = np.zeros(members)
-    running = np.empty((intervals, members))
-    start = time.perf_counter()
+    running = np.empty((members, intervals))
     for j, segment in enumerate(run, start=1):
         require_finite(segment, "lyapunov_benettin")
         q_ref, q_cmp = segment.theta[-1, :members], segment.theta[-1, members:]
         p_ref, p_cmp = segment.p[-1, :members], segment.p[-1, members:]
         d = phase_distance(q_ref, p_ref, q_cmp, p_cmp)
         log_sum += np.log(d / delta)
-        running[j - 1] = log_sum / (j * every * dt)
+        running[:, j - 1] = log_sum / (j * every * dt)
         shrink = (delta / d)[:, None]
         run.restart(q_ref + shrink * (q_cmp - q_ref), p_ref + shrink * (p_cmp - p_ref),
                     where=companion)
-    t = (np.arange(intervals) + 1) * every * dt
-    return LyapunovEstimate(t, running.reshape(intervals, *batch), "benettin", run.method.name,
-                            dt, time.perf_counter() - start)
+    return running
 
 
 def _ordered_product(mats: np.ndarray) -> np.ndarray:

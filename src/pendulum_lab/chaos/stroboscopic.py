@@ -157,6 +157,7 @@ def stroboscopic_section(
     p0=None,
     t0: float = 0.0,
     progress: bool | None = None,
+    segment_steps: int | None = None,
 ) -> StroboscopicSection:
     """Sample a driven pendulum once per drive period, after a transient.
 
@@ -181,6 +182,9 @@ def stroboscopic_section(
     method, t0, progress
         As for :func:`~pendulum_lab.simulate`. ``t0`` fixes the drive's phase
         at the samples.
+    segment_steps : int, optional
+        As for :func:`~pendulum_lab.simulate_segments` (a multiple of
+        ``steps_per_period``).
 
     Returns
     -------
@@ -207,7 +211,7 @@ def stroboscopic_section(
     run = simulate_segments(model, theta0, omega0, p0=p0, t_end=total * period,
                             dt=period / steps_per_period, method=method,
                             save_every=steps_per_period, t0=t0, progress=progress,
-                            label="stroboscopic")
+                            segment_steps=segment_steps, label="stroboscopic")
     parts = []
     for segment in run:
         require_finite(segment, "stroboscopic_section")
