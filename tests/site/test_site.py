@@ -6,6 +6,7 @@ The negative controls that show each check can fail are in ``test_site_controls.
 
 from __future__ import annotations
 
+import concurrent.futures
 import functools
 import html
 import importlib
@@ -14,7 +15,16 @@ import pkgutil
 import re
 
 import pytest
-from site_harness import CATEGORIES, MODES, REPO_ROOT, SCREENSHOTS, list_pages
+from site_harness import (
+    CATEGORIES,
+    CHROMIUM_ARGS,
+    MODES,
+    REPO_ROOT,
+    SCREENSHOTS,
+    chromium_path,
+    list_pages,
+    serve,
+)
 
 import pendulum_lab
 
@@ -195,6 +205,64 @@ def test_the_checks_saw_what_they_check(course_pages, course_site):
     played = {r.page for r in light if r.animations}
     assert embedding <= played, f"no animation played on {sorted(embedding - played)}"
     assert sum(len(r.links) for r in light) > 0
+
+
+# Speech and the explorer (MathJax's menu, Accessibility) load the speech rule engine, whose
+# bundled defaults name a CDN for its rule files; MathJax points it at the local copy instead.
+_SPEECH_ON = """async () => {
+    await MathJax.startup.promise;
+    const pool = MathJax.startup.document.menu.menu.pool;
+    pool.lookup('speech').setValue(true);
+    pool.lookup('explorer').setValue(true);
+    for (let i = 0; i < 100 && !window.SREfeature; i++) await new Promise(r => setTimeout(r, 100));
+    await new Promise(r => setTimeout(r, 3000));  // the rule files load after the engine
+}"""
+
+
+def _requests_with_speech_on(html_dir) -> tuple[str, list[str]]:
+    """The server's address and every URL a notebook page requests once speech is on.
+
+    Runs in a thread of its own, as the crawl does: Playwright's sync API refuses a thread
+    where an asyncio loop runs (the browser tests leave one in the main thread).
+    """
+    from urllib.parse import urlsplit
+
+    from playwright.sync_api import sync_playwright
+
+    def visit():
+        requests = []
+        with serve(html_dir) as base, sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
+            try:
+                page = browser.new_page()
+                page.on("request", lambda request: requests.append(request.url))
+                page.route("**/*", lambda r: r.abort() if urlsplit(r.request.url).netloc
+                           != urlsplit(base).netloc else r.continue_())
+                page.goto(f"{base}/notebooks/01_deriving_the_equations.html", wait_until="load")
+                page.wait_for_function(
+                    "window.MathJax && MathJax.startup && MathJax.startup.document"
+                )
+                page.evaluate(_SPEECH_ON)
+            finally:
+                browser.close()
+        return base, requests
+
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        return pool.submit(visit).result()
+
+
+def test_mathematics_read_aloud_fetches_nothing_outside_the_site(course_site):
+    """A reader who turns on MathJax's speech loads the speech engine and its rule files from
+    the site itself: the rule files must be requested (the feature ran) and only locally."""
+    from urllib.parse import urlsplit
+
+    if not course_site.ok:
+        pytest.fail("the course site did not build; see test_site_builds", pytrace=False)
+    base, requests = _requests_with_speech_on(course_site.output)
+    rule_files = [url for url in requests if "/sre/mathmaps/" in url]
+    assert rule_files, "speech did not load its rule files: the check saw nothing"
+    outside = [url for url in requests if urlsplit(url).netloc != urlsplit(base).netloc]
+    assert not outside, f"requests outside the site: {outside}"
 
 
 def test_screenshots_of_every_page_in_both_modes(course_pages, course_site):
