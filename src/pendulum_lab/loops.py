@@ -25,6 +25,7 @@ import math
 import re
 import sys
 
+import numba
 import numpy as np
 
 from . import codegen
@@ -58,7 +59,7 @@ RUNNING, NOT_FINITE, NOT_CONVERGED = 0, 1, 2
 STEPS, SWEEPS, CALLS, STATUS = 0, 1, 2, 3
 
 
-@kernel_function
+@numba.njit
 def _all_finite(x):
     """``np.all(np.isfinite(x))`` without allocating a temporary array."""
     for value in x:
@@ -67,7 +68,7 @@ def _all_finite(x):
     return True
 
 
-@kernel_function
+@numba.njit
 def _copy(out, x):
     """``out[:] = x`` for 1-d arrays, as a plain loop (Numba's slice assignment checks for
     overlapping memory and may copy: several times slower for a few elements)."""
