@@ -380,3 +380,16 @@ def test_stage_iteration_contracts_in_proportion_to_the_step():
     assert len(runs[3].increments) > 4
     with pytest.raises(TypeError, match="`tableau`"):
         stage_contraction(dp, [2.0, 2.5], [0.0, 0.0], dt=0.01, tableau="gauss")
+
+
+def test_generated_modules_are_made_once_per_text():
+    """Two cache entries for one kernel module must give the same kernels, or the loops
+    compiled with the field's kernels (imported by name) would see other objects."""
+    from pendulum_lab import codegen
+
+    first, second = codegen.load_kernels(2), codegen.load_kernels(2, False)
+    assert first.hamilton is second.hamilton
+    run = pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=0.1, dt=0.01, method="rk4")
+    assert run.completed
+    # negative control: another chain is another module
+    assert codegen.load_kernels(1).hamilton is not first.hamilton

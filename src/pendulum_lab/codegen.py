@@ -339,15 +339,19 @@ def load_generated(stem: str, source: str, derived_from=(), inject: dict | None 
     and a fresh Numba cache: Numba's cache checks only the generated file
     itself. ``inject`` sets module globals before the source runs (objects
     that cannot be imported by name). Returns ``(module, path)``; the module
-    is registered in ``sys.modules`` as ``pendulum_lab_kernels_<stem>_<digest>``.
+    is registered in ``sys.modules`` as ``pendulum_lab_kernels_<stem>_<digest>``
+    and a second call returns it again (its kernels stay the objects that
+    compiled loops import by name).
     """
     here = Path(__file__).parent
     support = b"".join((here / name).read_bytes()
                        for name in ("codegen.py", "_signatures.py", *derived_from))
     digest = hashlib.sha256(source.encode() + support).hexdigest()[:16]
     path = cache_dir() / f"{stem}_{digest}.py"
-    _write_if_changed(path, source)
     name = f"pendulum_lab_kernels_{stem}_{digest}"
+    if name in sys.modules:  # the same text and support: the module already made
+        return sys.modules[name], path
+    _write_if_changed(path, source)
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     module.__dict__.update(inject or {})
