@@ -19,6 +19,7 @@ True
 """
 
 from .family import ModelFamily
+from .henon import henon_step
 from .integrators import (
     CONFORMAL_METHODS,
     METHODS,
@@ -30,7 +31,7 @@ from .integrators import (
 from .mechanics import Chain, derive_chain
 from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
 from .segments import SegmentedRun, simulate_segments
-from .simulate import Trajectory, hamiltonian_field, henon_step, simulate, step, step_count
+from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
 
 __version__ = "0.1.0"
 

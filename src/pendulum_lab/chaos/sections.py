@@ -23,10 +23,11 @@ import numpy as np
 from .. import _validation as check
 from .._angles import wrap_angle
 from ..events import check_direction, find_crossings, land
+from ..henon import henon_step
 from ..integrators import get_method
 from ..model import PendulumModel
 from ..segments import simulate_segments
-from ..simulate import canonical_state, henon_step, step
+from ..simulate import canonical_state, step
 from ._common import phase_distance, require_finite
 
 __all__ = [
