@@ -1,12 +1,13 @@
-"""Item 11: a flip-time map on a Dask ``LocalCluster`` against the same map in this process.
+"""Item 14: a flip-time map on a Dask ``LocalCluster`` against the same map in this process.
 
 The map of issue 17 (1000 x 1000 cells to t = 10 in the full configuration)
-runs once in this process and once on a local cluster of worker processes
+runs once in this process and twice on a local cluster of worker processes
 (``pendulum_lab.cluster``: the cells cut into chunks, the same function and
-kernels on every worker). Reported: cells per second per worker against the
-in-process run's per core, both by the wall clock and per CPU-second (the
-workers' CPU time is read on the workers), and whether the two maps are
-identical bit for bit. Without ``dask.distributed`` the row says so.
+kernels on every worker): with the environment Dask gives its workers, and
+without its ``MALLOC_TRIM_THRESHOLD_``. Reported: cells per second per worker
+against the in-process run's per core, both by the wall clock and per
+CPU-second (the workers' CPU time is read on the workers), and whether the
+maps are identical bit for bit. Without ``dask.distributed`` the row says so.
 """
 
 from __future__ import annotations
@@ -108,7 +109,7 @@ def bench_distributed(cfg: Config) -> Section:
         f"Dask's nanny starts each worker with `MALLOC_TRIM_THRESHOLD_=65536` (its "
         f"`distributed.nanny.pre-spawn-environ`), which turns off glibc's adaptive mmap "
         f"threshold: every array over 128 kB that a segment allocates is mapped and "
-        f"page-faulted afresh, and the map costs more CPU on a worker than in this process. The "
+        f"page-faulted afresh, which costs CPU time in the kernel. The "
         f"third row starts the workers without it (the config value None): "
         f"{fmt_time(untrimmed_sample.wall)} wall, {fmt_time(untrimmed_cpu)} CPU on the workers.",
     ]

@@ -473,8 +473,11 @@ def first_dissipative_term(model: PendulumModel, method, max_power: int = 6) -> 
             quiet.append(power)
             continue
         h_theta, h_p = (sp.diff(model.hamiltonian, x) for x in (theta, p))
-        return DissipativeTerm(power, field, sp.factor(divergence),
-                               sp.factor(h_theta * field[0] + h_p * field[1]), tuple(quiet))
+        # factor_terms, not factor: SymPy's multivariate factorization picks random
+        # evaluation points and now and then takes many minutes here (seen in CI)
+        return DissipativeTerm(power, field, sp.factor_terms(divergence),
+                               sp.factor_terms(h_theta * field[0] + h_p * field[1]),
+                               tuple(quiet))
     raise ValueError(f"every term of {get_method(method).name!r}'s modified equation up to "
                      f"h^{max_power} is divergence-free (a symplectic method has no such term)")
 
