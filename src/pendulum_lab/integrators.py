@@ -672,11 +672,11 @@ def conformal_leapfrog_step(hamilton, acceleration, t, q, p, h, params, separabl
     ``exp(-n gamma h)``, as the true flow does; symmetric, second order.
     """
     contraction, n = math.exp(-0.5 * damping_rate * h), q.size
-    contracted = memory[:n]
+    contracted = vector(memory, 0, n)
     for i in range(n):
         contracted[i] = contraction * p[i]
     q1, p1, sweeps, calls = stormer_verlet(hamilton, t, q, contracted, h, params, separable,
-                                           damping_rate, memory[n:])
+                                           damping_rate, span(memory, n, 8 * n))
     for i in range(n):
         p1[i] = contraction * p1[i]
     return q1, p1, sweeps, calls
