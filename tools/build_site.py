@@ -24,6 +24,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from jupyter_cache.cache.db import create_db
+
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DOCS = REPO_ROOT / "docs"
 OUTPUT = DOCS / "_build" / "html"
@@ -84,6 +86,12 @@ def build(
     reason = missing_mathjax()
     if reason:
         raise FileNotFoundError(reason)
+    # With an empty cache both parallel readers would create MyST-NB's execution cache
+    # (output/../.jupyter_cache); jupyter_cache checks, then creates, and the second
+    # reader fails with FileExistsError (seen in CI). Create it, and its database, first.
+    execution_cache = output.parent / ".jupyter_cache"
+    execution_cache.mkdir(parents=True, exist_ok=True)
+    create_db(execution_cache).dispose()
     command = [
         sys.executable, "-m", "sphinx",
         "-b", "html", "-E", "-q", "-j", str(jobs),
