@@ -16,6 +16,7 @@ import pytest
 import pendulum_lab as pl
 from pendulum_lab import chaos, segments
 from pendulum_lab.chaos.bifurcation import bifurcation_samples
+from pendulum_lab.chaos.lyapunov import tangent_running
 from pendulum_lab.cluster import check_client, map_members
 from pendulum_lab.integrators import Method, get_method
 
@@ -126,3 +127,43 @@ def test_lyapunov_map_of_a_family_on_the_cluster_is_the_local_map(client):
     # Negative control: one amplitude for all gives other estimates.
     single = chaos.lyapunov_benettin(family.member(0), theta0, omega0, t_end=4.0, method="rk4")
     assert not np.array_equal(single.running, local.running)
+
+
+def test_variational_lyapunov_map_on_the_cluster_is_the_local_map(client):
+    grid = np.stack(np.meshgrid(np.linspace(0.5, 2.5, 4), np.linspace(0.3, 2.7, 3)), axis=-1)
+    rest = np.zeros_like(grid)
+    local = chaos.lyapunov_variational(DP, grid, rest, t_end=3.0, method="rk4")
+    remote = chaos.lyapunov_variational(DP, grid, rest, t_end=3.0, method="rk4", client=client,
+                                        chunk_size=5)
+    assert remote.running.shape == local.running.shape == (6, 3, 4)
+    assert np.array_equal(remote.running, local.running) and np.array_equal(remote.t, local.t)
+    # Negative control: another tangent direction changes the estimates.
+    seeded = chaos.lyapunov_variational(DP, grid, rest, t_end=3.0, method="rk4", client=client,
+                                        chunk_size=5, seed=1)
+    assert not np.array_equal(seeded.running, local.running)
+
+
+def test_lyapunov_spectrum_of_a_family_on_the_cluster_is_the_local_spectrum(client, monkeypatch):
+    # Little memory per segment: the whole batch would run in segments of 10 steps, a
+    # chunk of it in longer ones; the driven field's time is rounded from a segment's
+    # start, so the chunks must run in the whole batch's segments.
+    monkeypatch.setattr(segments, "SEGMENT_FLOATS", 1000)
+    family = pl.driven_pendulum().family(drive_amplitude=[0.9, 1.2, 1.5])
+    theta0, omega0 = np.full((2, 3, 1), 0.2), np.zeros((2, 3, 1))
+    theta0[1] = 1.0
+    period = family.member(0).drive_period
+    kwargs = dict(t_end=20 * period, dt=period / 20, method="rk4", save_every=10)
+    local = chaos.lyapunov_spectrum(family, theta0, omega0, **kwargs)
+    remote = chaos.lyapunov_spectrum(family, theta0, omega0, **kwargs, client=client,
+                                     chunk_size=2)
+    assert remote.running.shape == local.running.shape == (40, 2, 3, 2)
+    assert np.array_equal(remote.running, local.running) and np.array_equal(remote.t, local.t)
+    # Negative control: a chunk in segments of its own size is not the same to the bit.
+    rows = np.arange(2)  # released at rest: p0 = 0
+    own = segments.segment_length(400, 4 * len(rows) * 4, 10)
+    assert own != segments.segment_length(400, 4 * 6 * 4, 10)
+    running = tangent_running(theta0.reshape(-1, 1)[rows], np.zeros((2, 1)), rows,
+                              family.for_ensemble((2, 3)), period / 20, 10, 40, "rk4",
+                              np.eye(2), own)
+    assert not np.array_equal(running, local.running.reshape(40, 6, 2)[:, rows].swapaxes(0, 1))
+

@@ -52,6 +52,7 @@ __all__ = [
     "lyapunov_by_energy",
     "lyapunov_spectrum",
     "lyapunov_variational",
+    "tangent_running",
 ]
 
 #: An orbit whose estimate after 100 s lies below this [1/s] is counted as
@@ -308,12 +309,11 @@ def _magnus_propagators(model, traj: Trajectory, dt: float) -> np.ndarray:
 
 
 def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every, t0, progress,
-                    directions, label):
+                    directions, label, client, chunk_size):
     """Carry the tangent vectors ``directions`` (shape ``(2n, k)``) along one run.
 
-    Every ``save_every`` steps the propagated vectors are re-orthonormalised
-    by a QR factorisation, ``V = Q R``; ``log |R_ii|`` is the growth of the
-    ``i``-th direction not already spanned by the first ``i - 1``.
+    Validates the arguments, then runs :func:`tangent_running` on the whole
+    batch, here or in chunks on a Dask cluster.
 
     Returns
     -------
@@ -327,12 +327,40 @@ def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every,
     model, theta0, p0, batch, dt, every, blocks = _prepare(
         model, theta0, omega0, p0, t_end, dt, "save_every", save_every
     )
-    n, members = model.n, len(theta0)
-    total = blocks * every
-    # Memory of a segment: the Jacobians and propagators of each of its steps.
-    length = segment_length(total, 4 * members * (2 * n) ** 2, every)
-    run = simulate_segments(model, theta0, p0=p0, t_end=total * dt, dt=dt, method=method,
-                            segment_steps=length, t0=check.real_number("t0", t0),
+    method = get_method(method)
+    client = check_client(client)
+    # Memory of a segment: the Jacobians and propagators of each of its steps. Sized
+    # for the whole batch and passed to every chunk: a driven model's time at a step
+    # is rounded from its segment's start (see default_segment_steps).
+    length = segment_length(blocks * every, 4 * len(theta0) * (2 * model.n) ** 2, every)
+    running = map_members(
+        tangent_running, (theta0, p0, np.arange(len(theta0))), client=client,
+        chunk_size=chunk_size, label=label, progress=progress,
+        args=(model, dt, every, blocks, portable_method(method, client), directions, length,
+              check.real_number("t0", t0), label, progress if client is None else False))
+    t = (np.arange(blocks) + 1) * every * dt
+    return (t, np.moveaxis(running, 0, 1).reshape(blocks, *batch, directions.shape[1]),
+            method.name, dt, time.perf_counter() - start)
+
+
+def tangent_running(theta0, p0, rows, model: PendulumModel, dt: float, every: int, blocks: int,
+                    method, directions, segment_steps: int, t0: float = 0.0,
+                    label: str = "variational", progress: bool | None = None) -> np.ndarray:
+    """Running estimates of tangent growth for a batch of states, shape ``(K, blocks, k)``.
+
+    The work of :func:`lyapunov_variational` and :func:`lyapunov_spectrum`
+    (arguments validated there) on states ``theta0, p0`` of shape ``(K, n)``,
+    rows ``rows`` of the whole flattened batch (a family's members are taken
+    there), here or on a Dask worker (:func:`pendulum_lab.cluster.map_members`).
+    The tangent vectors ``directions`` (shape ``(2n, k)``) are carried along;
+    every ``every`` steps the propagated vectors are re-orthonormalised by a QR
+    factorisation, ``V = Q R``, and ``log |R_ii|`` is the growth of the
+    ``i``-th direction not already spanned by the first ``i - 1``.
+    """
+    model = members_of(model, rows)
+    members = len(theta0)
+    run = simulate_segments(model, theta0, p0=p0, t_end=blocks * every * dt, dt=dt,
+                            method=method, segment_steps=segment_steps, t0=t0,
                             progress=progress, label=label)
     basis = np.broadcast_to(directions, (members, *directions.shape)).copy()
     log_sum = np.zeros((members, directions.shape[1]))
@@ -348,9 +376,7 @@ def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every,
             log_sum += np.log(np.abs(np.diagonal(r, axis1=-2, axis2=-1)))
             recorded += 1
             running[recorded - 1] = log_sum / (recorded * every * dt)
-    t = (np.arange(blocks) + 1) * every * dt
-    return (t, running.reshape(blocks, *batch, directions.shape[1]), run.method.name, dt,
-            time.perf_counter() - start)
+    return np.moveaxis(running, 0, 1)
 
 
 def lyapunov_variational(
@@ -366,6 +392,8 @@ def lyapunov_variational(
     t0: float = 0.0,
     seed=0,
     progress: bool | None = None,
+    client=None,
+    chunk_size: int | None = None,
 ) -> LyapunovEstimate:
     """Largest Lyapunov exponent from the variational (tangent) equations.
 
@@ -414,6 +442,12 @@ def lyapunov_variational(
     seed : int or None
         Seed of the initial tangent direction (the same direction as
         :func:`lyapunov_benettin` with the same seed).
+    client : dask.distributed.Client, optional
+        Integrate an ensemble (a Lyapunov map) on this Dask cluster, in
+        chunks of members (:func:`pendulum_lab.cluster.map_members`); the
+        estimates are the same, bit for bit, as without it.
+    chunk_size : int, optional
+        Members per chunk on a cluster (by default a few chunks per worker).
 
     Returns
     -------
@@ -441,7 +475,7 @@ def lyapunov_variational(
     t, running, name, dt, seconds = _tangent_growth(
         model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
         t0=t0, progress=progress, directions=unit_direction(2 * model.n, seed)[:, None],
-        label="variational",
+        label="variational", client=client, chunk_size=chunk_size,
     )
     return LyapunovEstimate(t, running[..., 0], "variational", name, dt, seconds)
 
@@ -504,6 +538,8 @@ def lyapunov_spectrum(
     p0=None,
     t0: float = 0.0,
     progress: bool | None = None,
+    client=None,
+    chunk_size: int | None = None,
 ) -> LyapunovSpectrum:
     """All ``2n`` Lyapunov exponents, by QR re-orthonormalisation of the tangent vectors.
 
@@ -534,6 +570,12 @@ def lyapunov_spectrum(
         ``floor(n_steps / save_every)`` whole blocks of steps.
     save_every : int
         Steps between re-orthonormalisations (and recorded estimates), ``>= 1``.
+    client : dask.distributed.Client, optional
+        Integrate an ensemble on this Dask cluster, in chunks of members
+        (:func:`pendulum_lab.cluster.map_members`); the spectra are the same,
+        bit for bit, as without it.
+    chunk_size : int, optional
+        Members per chunk on a cluster (by default a few chunks per worker).
 
     Returns
     -------
@@ -563,6 +605,7 @@ def lyapunov_spectrum(
     t, running, name, dt, seconds = _tangent_growth(
         model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
         t0=t0, progress=progress, directions=np.eye(2 * model.n), label="spectrum",
+        client=client, chunk_size=chunk_size,
     )
     return LyapunovSpectrum(t, running, name, dt, seconds)
 
