@@ -15,6 +15,7 @@ import pytest
 
 import pendulum_lab as pl
 from pendulum_lab import chaos, segments
+from pendulum_lab.chaos.basins import basin_samples
 from pendulum_lab.chaos.bifurcation import bifurcation_samples
 from pendulum_lab.chaos.lyapunov import tangent_running
 from pendulum_lab.cluster import check_client, map_members
@@ -167,3 +168,41 @@ def test_lyapunov_spectrum_of_a_family_on_the_cluster_is_the_local_spectrum(clie
                               np.eye(2), own)
     assert not np.array_equal(running, local.running.reshape(40, 6, 2)[:, rows].swapaxes(0, 1))
 
+
+def test_basins_on_the_cluster_are_the_local_basins(client, monkeypatch):
+    # As for the bifurcation diagram: segments of the whole grid differ from a chunk's.
+    monkeypatch.setattr(segments, "SEGMENT_FLOATS", 1000)
+    model = pl.driven_pendulum(drive_amplitude=1.35)  # two rotations share the plane
+    axes = np.linspace(-3, 3, 5), np.linspace(-2.5, 2.5, 4)
+    kwargs = dict(transient_periods=30, steps_per_period=40, max_period=4)
+    local = chaos.basins_of_attraction(model, *axes, **kwargs)
+    remote = chaos.basins_of_attraction(model, *axes, **kwargs, client=client, chunk_size=3)
+    assert local.periods == (1, 1) and len(set(local.label.ravel().tolist())) == 2
+    assert np.array_equal(remote.label, local.label)
+    assert remote.turns == local.turns and remote.method == local.method
+    assert len(remote.attractors) == len(local.attractors)
+    assert all(np.array_equal(r, a) for r, a in zip(remote.attractors, local.attractors))
+    # Negative control: a chunk in segments of its own size is not the same to the bit.
+    theta, omega = (a.reshape(-1, 1)[:3] for a in np.meshgrid(*axes))
+    own = segments.default_segment_steps(1, 3, 38 * 40, 40)
+    whole = segments.default_segment_steps(1, 20, 38 * 40, 40)
+    assert own != whole
+    as_chunk = basin_samples(theta, omega, np.arange(3), model, 8, 30, 40, "rk4", whole)
+    alone = basin_samples(theta, omega, np.arange(3), model, 8, 30, 40, "rk4", own)
+    assert not np.array_equal(alone[0], as_chunk[0])
+
+
+@pytest.mark.parametrize("measure", [
+    lambda **kw: chaos.lyapunov_variational(DP, [2.0, 2.5], [0.0, 0.0], t_end=0.5, **kw),
+    lambda **kw: chaos.lyapunov_spectrum(DP, [2.0, 2.5], [0.0, 0.0], t_end=0.5, **kw),
+    lambda **kw: chaos.basins_of_attraction(pl.driven_pendulum(), [0.0, 1.0], [0.0],
+                                            transient_periods=1, steps_per_period=10, **kw),
+], ids=["variational", "spectrum", "basins"])
+def test_tangent_and_basin_ensembles_refuse_bad_clients(client, measure):
+    with pytest.raises(TypeError, match="`client` must be a dask.distributed.Client"):
+        measure(client="tcp://127.0.0.1:8786")
+    rk4 = get_method("rk4")
+    homemade = Method(**{f: getattr(rk4, f) for f in rk4.__dataclass_fields__})
+    with pytest.raises(ValueError, match="registered method"):
+        measure(method=homemade, client=client)
+    measure(method=homemade)  # locally an unregistered method is fine

@@ -23,10 +23,13 @@ import numpy as np
 
 from .. import _validation as check
 from .._angles import wrap_angle
+from ..cluster import check_client, map_members, members_of, portable_method
+from ..integrators import get_method
 from ..model import PendulumModel
-from .stroboscopic import PERIOD_TOLERANCE, orbit_periods, stroboscopic_section
+from ..segments import default_segment_steps
+from .stroboscopic import PERIOD_TOLERANCE, drive_period, orbit_periods, stroboscopic_section
 
-__all__ = ["Basins", "basins_of_attraction"]
+__all__ = ["Basins", "basin_samples", "basins_of_attraction"]
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,8 @@ def basins_of_attraction(
     tolerance: float = PERIOD_TOLERANCE,
     max_period: int = 8,
     progress: bool | None = None,
+    client=None,
+    chunk_size: int | None = None,
 ) -> Basins:
     """Label every initial state of a grid by the attractor it ends on.
 
@@ -108,6 +113,12 @@ def basins_of_attraction(
         Of the period detection (:func:`~pendulum_lab.chaos.orbit_periods`);
         a member joins an attractor when its last sample lies within
         ``tolerance`` of one of the attractor's points.
+    client : dask.distributed.Client, optional
+        Integrate the grid's starts on this Dask cluster, in chunks
+        (:func:`pendulum_lab.cluster.map_members`); the basins are the same,
+        bit for bit, as without it.
+    chunk_size : int, optional
+        Starts per chunk on a cluster (by default a few chunks per worker).
 
     Returns
     -------
@@ -129,14 +140,30 @@ def basins_of_attraction(
     axes = [check.real_sequence("theta0", theta0), check.real_sequence("omega0", omega0)]
     tolerance = check.positive_number("tolerance", tolerance)
     max_period = check.integer_at_least("max_period", max_period, 1)
+    transient_periods = check.integer_at_least("transient_periods", transient_periods, 0)
+    steps_per_period = check.integer_at_least("steps_per_period", steps_per_period, 1)
+    drive_period(model)  # refuse an undriven model here, not on a worker
     theta_grid, omega_grid = np.meshgrid(*axes)  # shape (W, A)
+    method = get_method(method)
+    client = check_client(client)
+    # The segments of the whole grid, for every chunk of it (see default_segment_steps).
+    segment_steps = default_segment_steps(1, theta_grid.size,
+                                          (transient_periods + 2 * max_period) * steps_per_period,
+                                          steps_per_period)
     start = time.perf_counter()
-    section = stroboscopic_section(model, theta_grid[..., None], omega_grid[..., None],
-                                   n_periods=2 * max_period, transient_periods=transient_periods,
-                                   steps_per_period=steps_per_period, method=method,
-                                   progress=progress)
-    theta, omega = section.theta[..., 0], section.omega[..., 0]
-    periods = orbit_periods(section.theta, section.omega, tolerance, max_period)
+    samples = map_members(
+        basin_samples, (theta_grid.reshape(-1, 1), omega_grid.reshape(-1, 1),
+                        np.arange(theta_grid.size)),
+        client=client, chunk_size=chunk_size, label="basins", progress=progress,
+        args=(model.for_ensemble(theta_grid.shape), 2 * max_period, transient_periods,
+              steps_per_period, portable_method(method, client), segment_steps,
+              progress if client is None else False))
+    # Back to the section's layout: samples first, then the grid, shape (S, W, A, 1).
+    section_theta, section_omega = (np.moveaxis(a, 0, 1).reshape(-1, *theta_grid.shape, 1)
+                                    for a in samples[:2])
+    section_turns = samples[2].reshape(*theta_grid.shape, 1)
+    theta, omega = section_theta[..., 0], section_omega[..., 0]
+    periods = orbit_periods(section_theta, section_omega, tolerance, max_period)
     label = np.full(periods.shape, -1)
     attractors, turns = [], []
     pending = periods > 0
@@ -151,6 +178,30 @@ def basins_of_attraction(
         label[joins] = len(attractors)
         pending &= ~joins
         attractors.append(points)
-        turns.append(float(np.round(section.turns[(*first, 0)], 6)) + 0.0)
+        turns.append(float(np.round(section_turns[(*first, 0)], 6)) + 0.0)
     return Basins(axes[0], axes[1], label, tuple(attractors), tuple(turns), tolerance,
-                  transient_periods, max_period, section.method, time.perf_counter() - start)
+                  transient_periods, max_period, method.name, time.perf_counter() - start)
+
+
+def basin_samples(theta0, omega0, rows, model: PendulumModel, n_periods: int,
+                  transient_periods: int, steps_per_period: int, method, segment_steps: int,
+                  progress: bool | None = None) -> tuple:
+    """The stroboscopic samples of the starts ``rows`` of a basins grid.
+
+    The work of :func:`basins_of_attraction` (arguments validated there) on
+    starts ``theta0, omega0`` of shape ``(K, 1)``, rows ``rows`` of the
+    flattened grid (a family's members are taken there), here or on a Dask
+    worker (:func:`pendulum_lab.cluster.map_members`).
+
+    Returns
+    -------
+    theta, omega : ndarray, shape (K, S, 1)
+        Wrapped angles and velocities, the starts first.
+    turns : ndarray, shape (K, 1)
+    """
+    section = stroboscopic_section(
+        members_of(model, rows), theta0, omega0, n_periods=n_periods,
+        transient_periods=transient_periods, steps_per_period=steps_per_period, method=method,
+        progress=progress, segment_steps=segment_steps,
+    )
+    return np.moveaxis(section.theta, 1, 0), np.moveaxis(section.omega, 1, 0), section.turns
