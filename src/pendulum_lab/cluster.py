@@ -1,8 +1,11 @@
 """Ensembles beyond one process: a batch cut into chunks for the workers of a Dask cluster.
 
-The ensemble measurements (:func:`~pendulum_lab.chaos.flip_time_map`,
-:func:`~pendulum_lab.chaos.lyapunov_benettin` over a grid of initial states,
-:func:`~pendulum_lab.chaos.bifurcation_diagram`) take one keyword, ``client``: a
+The ensemble measurements (:func:`~pendulum_lab.chaos.flip_time_map`;
+:func:`~pendulum_lab.chaos.lyapunov_benettin`,
+:func:`~pendulum_lab.chaos.lyapunov_variational` and
+:func:`~pendulum_lab.chaos.lyapunov_spectrum` over a grid of initial states;
+:func:`~pendulum_lab.chaos.bifurcation_diagram`,
+:func:`~pendulum_lab.chaos.basins_of_attraction`) take one keyword, ``client``: a
 ``dask.distributed.Client``. Without it the whole batch is one chunk,
 computed in this process (its members in parallel threads, as
 :func:`~pendulum_lab.simulate` does). With it the batch is cut into
