@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 import peers
+import stage_solvers
 from harness import (
     THETA0,
     Config,
@@ -99,6 +100,25 @@ def _heyoka_runner(dp, theta0, omega0):
     return run
 
 
+def _stage_solver_study(cfg, dp, theta0, method, dt, requirement, budget) -> str:
+    """Evaluations per step under other stage solvers, against what matching heyoka allows.
+
+    ``budget``: the field evaluations (at our measured cost per evaluation)
+    one step could spend for our run to take heyoka's time.
+    """
+    tableau = pl.METHODS[method].tableau
+    counts = stage_solvers.evaluations_per_step(dp, theta0, dp.momenta(theta0, np.zeros(2)),
+                                                tableau, dt, cfg.stage_study_t_end)
+    found = "; ".join(f"{name} {count:.1f}" if count > 0 else f"{name}: did not converge"
+                      for name, count in counts.items())
+    return (
+        f"Stage solvers for <= {requirement:g} ({method}, dt = {dt:.4g}, "
+        f"T = {cfg.stage_study_t_end:g}; field evaluations per step, the Jacobian's included; "
+        f"`stage_solvers.py`): {found}. Matching heyoka's time allows {budget:.1f} per step, "
+        f"{budget / tableau.stages:.1f} sweeps of the {tableau.stages} stages."
+    )
+
+
 def bench_heyoka(cfg: Config) -> Section:
     """Long accurate runs: ours (fastest symplectic) against heyoka's cheapest passing tolerance."""
     hy, reason = peers.heyoka_or_reason()
@@ -166,6 +186,8 @@ def bench_heyoka(cfg: Config) -> Section:
             f"{run_heyoka.steps} Taylor steps of order {chosen[1]}, "
             f"{t_peer / max(run_heyoka.steps, 1) * 1e6:.2f} us each."
         )
+        details.append(_stage_solver_study(cfg, dp, theta0, best, dt, requirement,
+                                           t_peer / steps / (t_ours / evaluations)))
         ratio = t_ours / t_peer
         limit = cfg.peer_targets.get(requirement, 1.0)
         rows.append(Row(
