@@ -263,6 +263,35 @@ def test_stopping_rule_reports_divergence_and_non_finite():
     assert status == -1
 
 
+def test_stopping_rule_floor_accepts_a_stall_at_the_round_off_of_larger_numbers():
+    # Iterates near 1 stalled at 1e-10: far above their own round-off, so the
+    # rule keeps going (the iteration may be diverging) ...
+    old, new = np.array([1.0]), np.array([1.0 + 1e-10])
+    assert fixed_point_status(new, old, np.array([1e-10])) == 0
+    # ... unless they are combined with numbers of size 1e5 (the floor), whose
+    # last place is 1.5e-11: then 1e-10 is round-off and the stall is accepted.
+    assert fixed_point_status(new, old, np.array([1e-10]), 1e5) == 1
+
+
+@pytest.mark.parametrize("name", ["glrk4", "glrk8"])
+def test_gauss_steps_converge_at_angles_of_many_turns(name):
+    """Far from theta = 0 a stage's slopes stall at the round-off of the angles.
+
+    The start is (2, 2.5) plus 16000 and 32000 whole turns (about 1e5 and 2e5
+    rad, as a long run of a rotating pendulum reaches): the same motion. Before
+    the stopping rule judged slopes against the state (its ``floor``), the
+    stall was taken for divergence and the run refused with ConvergenceError.
+    """
+    turns = 2 * np.pi * np.array([16000.0, 32000.0])
+    far = pl.simulate(DP, np.array([2.0, 2.5]) + turns, [0.0, 0.0], t_end=2.0, dt=0.01,
+                      method=name)
+    near = pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=2.0, dt=0.01, method=name)
+    # the same motion, to the round-off of the angles (2e5 * 2.2e-16 = 4e-11 per step)
+    difference = np.max(np.abs((far.theta - turns) - near.theta))
+    assert difference < 1e-9
+    assert difference > 0  # negative control: the large angles do round differently
+
+
 def test_glrk4_too_large_dt_raises_naming_step_and_time():
     with pytest.raises(pl.ConvergenceError, match=r"at step \d+ \(t = [0-9.]+"):
         pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=20.0, dt=0.6, method="glrk4")

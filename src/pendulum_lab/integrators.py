@@ -222,17 +222,21 @@ def jit_step(py_func=None, *, memory=None):
 # --------------------------------------------------------------------------- implicit solver
 MAX_SWEEPS = 100
 # A stalled iteration counts as converged only if its last increment is this
-# small relative to the unknowns: stalling far from round-off means divergence.
+# small relative to the unknowns (or to the floor the caller gives, see
+# fixed_point_status): stalling far from round-off means divergence.
 ROUNDOFF_TOLERANCE = 1e-11
 EPSILON = np.finfo(np.float64).eps
 
 
 @numba.njit
-def fixed_point_status(new, old, smallest):
+def fixed_point_status(new, old, smallest, floor=0.0):
     """The stopping rule of every implicit solve here, applied per component.
 
     ``new`` and ``old`` are successive iterates (1-d arrays) and ``smallest``
-    holds each component's smallest increment so far (updated in place). A
+    holds each component's smallest increment so far (updated in place).
+    ``floor`` is added to every component's size where "tiny" is judged
+    (below): unknowns whose round-off is set by larger numbers they are
+    combined with, as the slopes of :func:`implicit_rk`, need it. A
     component is done when its increment did not fall below its smallest
     earlier one (it only jitters at round-off now), or when the iteration's
     observed contraction predicts that all its further corrections together
@@ -251,7 +255,7 @@ def fixed_point_status(new, old, smallest):
     for i in range(new.size):
         x = new[i]
         finite &= math.isfinite(x)
-        small &= abs(x - old[i]) <= ROUNDOFF_TOLERANCE * (1.0 + abs(x))
+        small &= abs(x - old[i]) <= ROUNDOFF_TOLERANCE * (1.0 + floor + abs(x))
     if not finite:
         return -1
     if not small:
@@ -389,6 +393,12 @@ def implicit_rk(hamilton, t, q, p, h, params, a, b, c, extrapolation, memory):
     The stage slopes solve ``K_i = f(t + c_i h, y + h sum_j a_ij K_j)``; they
     are found by fixed-point iteration, each sweep re-evaluating every stage
     at the latest slopes, until :func:`fixed_point_status` finds round-off.
+    A slope's round-off is not set by its own size: it enters the stage
+    states as ``y + h sum_j a_ij K_j``, rounded to the state's last place, so
+    a slope stalls at about ``L ulp(y)`` (``L`` the field's Lipschitz
+    constant). The stopping rule's "tiny" is therefore judged against
+    ``max |y| / h`` too; without it a long run whose angles had grown to a
+    few hundred radians stalled just above the tolerance and was refused.
 
     The first guess: if ``memory`` holds the slopes of a previous step of the
     same size, they are continued with ``K_i^0 = sum_j E_ij K_j^prev``
@@ -433,6 +443,10 @@ def implicit_rk(hamilton, t, q, p, h, params, a, b, c, extrapolation, memory):
             for m in range(2 * n):
                 memory[slopes + 2 * i * n + m] = memory[slopes + m]
     smallest[:] = np.inf
+    floor = 0.0
+    for m in range(n):
+        floor = max(floor, abs(q[m]), abs(p[m]))
+    floor /= abs(h)
     sweeps, status = 0, 0
     while status == 0 and sweeps < MAX_SWEEPS:
         sweeps += 1
@@ -451,7 +465,7 @@ def implicit_rk(hamilton, t, q, p, h, params, a, b, c, extrapolation, memory):
             hamilton(t + c[i] * h, stage_q, stage_p, params, span(memory, out, n),
                      span(memory, out + n, n))
         status = fixed_point_status(span(memory, new_at, size), span(memory, old_at, size),
-                                    smallest)
+                                    smallest, floor)
         current = new
     calls += stages * sweeps
     if status != 1:
