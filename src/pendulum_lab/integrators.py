@@ -453,12 +453,15 @@ def implicit_rk(hamilton, t, q, p, h, params, a, b, c, extrapolation, memory):
         new = 1 - current
         old_at, new_at = slopes + current * size, slopes + new * size
         for i in range(stages):
-            # sum_j a_ij K_j, all 2 n components at once (the compiler vectorizes this)
+            # sum_j a_ij K_j, one stage's 2 n contiguous slopes at a time (the compiler
+            # vectorizes the inner loop; same sums in the same order as a dot product)
+            weight = a[i, 0]
             for m in range(2 * n):
-                total = 0.0
-                for j in range(stages):
-                    total += a[i, j] * memory[old_at + 2 * j * n + m]
-                memory[work + m] = total
+                memory[work + m] = weight * memory[old_at + m]
+            for j in range(1, stages):
+                weight = a[i, j]
+                for m in range(2 * n):
+                    memory[work + m] += weight * memory[old_at + 2 * j * n + m]
             for m in range(n):
                 stage_q[m], stage_p[m] = q[m] + h * stage_q[m], p[m] + h * stage_p[m]
             out = new_at + 2 * i * n
