@@ -12,7 +12,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import pendulum_lab as pl
-from pendulum_lab import chaos
+from pendulum_lab import chaos, segments
+from pendulum_lab.chaos import flips
 
 DP = pl.double_pendulum()
 SP = pl.simple_pendulum()
@@ -200,6 +201,20 @@ def test_flip_map_is_symmetric_under_theta_to_minus_theta(size):
     assert np.isfinite(fm.time).sum() > size  # some cells flip
     # Negative control: mirroring one angle alone is not a symmetry.
     assert not np.array_equal(fm.time, fm.time[:, ::-1])
+
+
+def test_flip_map_in_blocks_is_the_map_of_one_ensemble(monkeypatch):
+    # Little memory per segment: the whole grid and a block of it then run in segments
+    # of different lengths (7 and 111 steps), as a large map's do.
+    monkeypatch.setattr(segments, "SEGMENT_FLOATS", 8000)
+    whole = chaos.flip_time_map(DP, 14, t_end=2.0)  # 140 cells: one ensemble
+    monkeypatch.setattr(flips, "BLOCK_CELLS", 9)
+    in_blocks = chaos.flip_time_map(DP, 14, t_end=2.0)  # 16 blocks, the last of 5 cells
+    assert np.isfinite(whole.time).sum() > 10  # some cells flip: the map is not trivial
+    assert np.array_equal(in_blocks.time, whole.time)
+    # Negative control: a longer run flips more cells, so equality is a real check.
+    longer = chaos.flip_time_map(DP, 14, t_end=2.5)
+    assert not np.array_equal(longer.time, whole.time)
 
 
 def test_energy_forbidden_cells_are_those_derived_and_never_flip():

@@ -3,6 +3,9 @@
 Every property has a negative control: a case where the same check must fail.
 """
 
+import copy
+import itertools
+
 import numpy as np
 import pytest
 
@@ -88,6 +91,31 @@ def test_members_can_leave_and_move_between_segments():
         run.restart([[0.0, 0.0]], [[0.0, 0.0]], where=[True, False])
     with pytest.raises(ValueError, match="`segment_steps`"):
         pl.simulate_segments(SP, [1.0], [0.0], t_end=1.0, save_every=3, segment_steps=10)
+
+
+def test_segments_handed_out_are_never_overwritten():
+    theta0 = np.stack([CHAOTIC, [0.3, -0.2], [1.0, 1.5]])
+    run = pl.simulate_segments(DP, theta0, np.zeros_like(theta0), t_end=1.0, dt=0.01,
+                               method="rk4", segment_steps=20)
+    handed, snapshots = [], []
+    for segment in run:
+        handed.append(segment)
+        snapshots.append(copy.deepcopy(segment))
+        if len(handed) == 2:
+            run.keep(np.array([True, False, True]))
+        if len(handed) == 3:
+            run.restart([[0.5, 0.5]], [[0.0, 0.0]], where=[False, True])
+    assert len(handed) == 5
+    arrays = ("t", "theta", "omega", "p", "kinetic", "potential", "energy")
+    for segment, snapshot in zip(handed, snapshots):
+        for name in arrays:
+            assert np.array_equal(getattr(segment, name), getattr(snapshot, name))
+    for a, b in itertools.combinations(handed, 2):
+        assert not any(np.shares_memory(getattr(a, x), getattr(b, y))
+                       for x in arrays for y in arrays)
+    # Negative control: the run goes on from a view into the last segment handed out,
+    # so a run that stepped its state in place would overwrite that segment.
+    assert np.shares_memory(run._theta, handed[-1].theta)
 
 
 # --------------------------------------------------------------------------- bad input

@@ -391,8 +391,8 @@ def to_method_variables(model, method, q, y, given_momenta: bool) -> np.ndarray:
     return np.array(y, order="C")
 
 
-def progress_bar(total: int, work: int, enabled: bool | None, label: str):
-    """A tqdm bar over ``total`` steps, or None.
+def progress_bar(total: int, work: int, enabled: bool | None, label: str, unit: str = "step"):
+    """A tqdm bar over ``total`` steps (or other ``unit``), or None.
 
     ``enabled=None`` shows one only for work of a few seconds or more
     (``work`` = state updates, steps times ensemble members).
@@ -403,7 +403,7 @@ def progress_bar(total: int, work: int, enabled: bool | None, label: str):
         return None
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, desc=label, unit="step", mininterval=0.5)
+    return tqdm(total=total, desc=label, unit=unit, mininterval=0.5)
 
 
 def _check_memory(n_saved: int, members: int, n: int, t_end: float, dt: float, n_steps: int,

@@ -18,10 +18,22 @@ from ..events import find_crossings
 from ..integrators import get_method
 from ..model import PendulumModel
 from ..segments import simulate_segments
-from ..simulate import time_grid
+from ..simulate import progress_bar, step_count, time_grid
 from ._common import require_finite
 
 __all__ = ["FlipMap", "can_flip", "flip_time_map", "flip_times"]
+
+# Cells integrated as one ensemble. A segment holds at most
+# segments.SEGMENT_FLOATS (2**21) floats, about 8 per cell and step here, so the
+# more cells, the shorter the segments: the ~665,000 cells of a 1000 x 1000 map
+# ran in segments of one step. Each segment costs NumPy work per cell besides
+# its steps (its first state repeats the previous segment's last, the velocities
+# and energies of its states, the copy of the cells still running), and arrays
+# of tens of MB are mapped and page-faulted afresh by every segment. In blocks
+# of 10,000 cells the segments have 26 steps, and that map took 38% less CPU
+# time (16 s of it in the kernel before, 2 s after); the times are the same to
+# the last bit.
+BLOCK_CELLS = 10_000
 
 
 def can_flip(model: PendulumModel, theta, omega=None) -> np.ndarray:
@@ -133,8 +145,9 @@ def flip_time_map(
     rest, is integrated until an arm flips (the unwrapped ``|theta_i|``
     reaches ``pi``; the time is interpolated linearly between steps) or until
     ``t_end``. Cells that cannot flip on energy grounds (:func:`can_flip`)
-    are not simulated. The whole grid is one ensemble run in segments; cells
-    that have flipped leave the ensemble at the end of their segment.
+    are not simulated. The cells are integrated in blocks (``BLOCK_CELLS``),
+    each block one ensemble run in segments; cells that have flipped leave
+    the ensemble at the end of their segment.
 
     Parameters
     ----------
@@ -216,7 +229,9 @@ def flip_times(theta, model: PendulumModel, t_end: float, dt: float, method,
     """Flip time of each state released at rest, ``inf`` if none before ``t_end``.
 
     The work of :func:`flip_time_map` on a batch of cells, here or on a Dask
-    worker (:func:`pendulum_lab.cluster.map_members`).
+    worker (:func:`pendulum_lab.cluster.map_members`). The cells are
+    integrated in blocks of at most ``BLOCK_CELLS``; each cell's time is the
+    same in any block.
 
     Parameters
     ----------
@@ -228,6 +243,26 @@ def flip_times(theta, model: PendulumModel, t_end: float, dt: float, method,
     -------
     ndarray, shape (K,)
     """
+    flip = np.full(len(theta), np.inf)
+    if len(theta) <= BLOCK_CELLS:
+        return _block_flip_times(theta, model, t_end, dt, method, progress)
+    # One bar over the cells instead of one per block.
+    bar = progress_bar(len(theta), len(theta) * step_count(t_end, dt), progress,
+                       "flip-time map", unit="cell")
+    try:
+        for first in range(0, len(theta), BLOCK_CELLS):
+            block = slice(first, first + BLOCK_CELLS)
+            flip[block] = _block_flip_times(theta[block], model, t_end, dt, method, False)
+            if bar is not None:
+                bar.update(len(flip[block]))
+    finally:
+        if bar is not None:
+            bar.close()
+    return flip
+
+
+def _block_flip_times(theta, model, t_end, dt, method, progress) -> np.ndarray:
+    """:func:`flip_times` of one block of cells, integrated as one ensemble."""
     flip = np.full(len(theta), np.inf)
     if not len(theta):
         return flip
