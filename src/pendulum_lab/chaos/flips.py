@@ -243,9 +243,9 @@ def flip_times(theta, model: PendulumModel, t_end: float, dt: float, method,
     -------
     ndarray, shape (K,)
     """
-    flip = np.full(len(theta), np.inf)
     if len(theta) <= BLOCK_CELLS:
         return _block_flip_times(theta, model, t_end, dt, method, progress)
+    flip = np.full(len(theta), np.inf)
     # One bar over the cells instead of one per block.
     bar = progress_bar(len(theta), len(theta) * step_count(t_end, dt), progress,
                        "flip-time map", unit="cell")
