@@ -69,6 +69,11 @@ def _all_finite(x):
 
 
 @numba.njit
+def _keep(array):
+    """Nothing: a use of ``array`` that keeps it alive up to this point (see :func:`time_loop`)."""
+
+
+@numba.njit
 def _copy(out, x):
     """``out[:] = x`` for 1-d arrays, as a plain loop (Numba's slice assignment checks for
     overlapping memory and may copy: several times slower for a few elements)."""
@@ -141,6 +146,11 @@ def time_loop(step, first_kernel, second_kernel, n, separable, damping_rates, q,
         stats[k, SWEEPS] += sweeps_done
         stats[k, CALLS] += calls_done
         stats[k, STATUS] = status
+    # qk and pk point into `state` without holding a reference to it, and Numba
+    # frees an array after the last line that names it: without this use, the
+    # kernels' own allocations (a long chain's workspace) could be given the
+    # state's memory and overwrite it mid-step.
+    _keep(state)
 
 
 def new_memory(method: Method, members: int, n: int) -> np.ndarray:
