@@ -320,7 +320,9 @@ def span(memory, start, length):
     passed on costs an atomic increment and decrement, several times the
     arithmetic of a small step; a reshape calls into Numba's runtime. This
     view points into ``memory``'s data and owns nothing, so it must not
-    outlive ``memory`` (it never leaves the time loop).
+    outlive ``memory`` (it never leaves the time loop), and ``memory`` must be
+    named again after the view's last use if nothing else holds it: Numba
+    frees an array after the last line that names it (see ``loops.time_loop``).
     """
     return numba.carray(_element_address(memory, start), length)
 
