@@ -100,15 +100,15 @@ def _heyoka_runner(dp, theta0, omega0):
     return run
 
 
-def _stage_solver_study(cfg, dp, theta0, method, dt, requirement, budget) -> str:
+def _stage_solver_study(cfg, dp, theta0, p0, method, dt, requirement, budget) -> str:
     """Evaluations per step under other stage solvers, against what matching heyoka allows.
 
     ``budget``: the field evaluations (at our measured cost per evaluation)
     one step could spend for our run to take heyoka's time.
     """
     tableau = pl.METHODS[method].tableau
-    counts = stage_solvers.evaluations_per_step(dp, theta0, dp.momenta(theta0, np.zeros(2)),
-                                                tableau, dt, cfg.stage_study_t_end)
+    counts = stage_solvers.evaluations_per_step(dp, theta0, p0, tableau, dt,
+                                                cfg.stage_study_t_end)
     found = "; ".join(f"{name} {count:.1f}" if count > 0 else f"{name}: did not converge"
                       for name, count in counts.items())
     return (
@@ -127,7 +127,7 @@ def bench_heyoka(cfg: Config) -> Section:
         rows = [Row("11", f"T={cfg.peer_t_end:g}, energy <= {r:g}", "-", "heyoka: not installed",
                     "-", "-", "not available") for r in cfg.peer_requirements]
         return Section("heyoka", title, rows, [reason], {})
-    dp, theta0, omega0, _ = explorer_start()
+    dp, theta0, omega0, p0 = explorer_start()
     run_ours, evaluate = _our_runner(dp, theta0, omega0)
     run_heyoka = _heyoka_runner(dp, theta0, omega0)
     T, grid = cfg.peer_t_end, cfg.peer_grid
@@ -186,7 +186,7 @@ def bench_heyoka(cfg: Config) -> Section:
             f"{run_heyoka.steps} Taylor steps of order {chosen[1]}, "
             f"{t_peer / max(run_heyoka.steps, 1) * 1e6:.2f} us each."
         )
-        details.append(_stage_solver_study(cfg, dp, theta0, best, dt, requirement,
+        details.append(_stage_solver_study(cfg, dp, theta0, p0, best, dt, requirement,
                                            t_peer / steps / (t_ours / evaluations)))
         ratio = t_ours / t_peer
         limit = cfg.peer_targets.get(requirement, 1.0)

@@ -20,6 +20,8 @@ round-off), so the counts differ only by the solver.
 
 from __future__ import annotations
 
+import functools
+
 import numba
 import numpy as np
 
@@ -29,6 +31,7 @@ from pendulum_lab.simulate import hamiltonian_field
 SOLVERS = ("fixed point (ours)", "Gauss-Seidel", "simplified Newton")
 
 
+@functools.cache  # item 11 counts for each requirement: compile once per kernel
 def _make_counter(hamilton):
     """A compiled ``count(y0, h, steps, solver, params, a, b, c, e)`` for one field kernel."""
 
