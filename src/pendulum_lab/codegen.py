@@ -11,6 +11,15 @@ generated from the symbolic equations of :mod:`pendulum_lab.mechanics`:
 ``acceleration(t, q, v, params, out)``
     ``out = M(q)^-1 (F(q, v) + Q(v, t))``, for the course report's
     velocity-variable methods.
+``stages(ts, y, params, dy, work)``
+    ``hamilton`` at the columns of ``y = (q, p)`` (an implicit Runge-Kutta
+    step's stages, see :mod:`pendulum_lab._signatures`). For one or two links
+    it is ``hamilton``'s lines in one loop over the columns, with the sines
+    and cosines of :mod:`pendulum_lab._lane_math`, so that the compiler
+    evaluates 8 columns per pass with SIMD instructions; an angle beyond
+    those functions' range sends the call to the C library's, column by
+    column. Longer chains, and fields made elsewhere
+    (:func:`stage_kernel`), evaluate one column at a time.
 
 ``M`` is solved numerically (Cholesky; it is symmetric positive definite), as
 PyDy's code generator does, rather than inverted symbolically. The kernels are
@@ -35,6 +44,7 @@ import importlib.util
 import inspect
 import math
 import os
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -55,6 +65,7 @@ from .model import UNROLLED_MAX_LINKS
 
 __all__ = [
     "discrete_kernel_source",
+    "import_name",
     "kernel_source",
     "load_discrete_kernels",
     "load_generated",
@@ -64,6 +75,7 @@ __all__ = [
     "parameters_array",
     "sincos",
     "solve_spd",
+    "stage_kernel",
 ]
 
 
@@ -228,32 +240,36 @@ def _solve_lines(chain: Chain, mapping: dict, rhs: list[str], rhs_array: str, ou
 
 
 def kernel_source(chain: Chain) -> str:
-    """The Python source of the two Numba kernels for ``chain``."""
+    """The Python source of the Numba kernels for ``chain`` (see the module docstring)."""
     n = chain.n
     _, _, _, mapping = _plain_symbols(chain)
     unpack = [f"th{i} = q[{i}]" for i in range(n)]
-    unpack += [f"par{i} = params[{i}]" for i in range(len(chain.parameters))]
+    parameters = [f"par{i} = params[{i}]" for i in range(len(chain.parameters))]
     momentum_rates = chain.dlagrangian_dq
     if chain.forced:
         momentum_rates = momentum_rates + chain.generalized_forces
     mass = list(chain.mass_matrix)
     trig_lines, trig = _trig_lines(mass + list(momentum_rates), mapping)
-    hamilton = unpack + trig_lines
+    hamilton = trig_lines
     hamilton += _solve_lines(chain, mapping, [f"p[{i}]" for i in range(n)], "p", "dq", "a",
                              trig)
     hamilton += [f"w{i} = dq[{i}]" for i in range(n)]
     hamilton += _assignments([f"dp[{i}]" for i in range(n)], list(momentum_rates), mapping, "b",
                              trig)
+    if n <= UNROLLED_MAX_LINKS:
+        angles = sorted({call.args[0] for e in mass + list(momentum_rates)
+                         for call in sp.sympify(e).xreplace(mapping).atoms(sp.sin, sp.cos)},
+                        key=str)
+        stages = _lane_source(parameters, unpack, hamilton, angles)
+    else:
+        stages = _ONE_BY_ONE.format(name="stages", field="hamilton")
     trig_lines, trig = _trig_lines(mass + list(chain.forcing), mapping)
-    accel = unpack + trig_lines + [f"w{i} = v[{i}]" for i in range(n)]
+    accel = unpack + parameters + trig_lines + [f"w{i} = v[{i}]" for i in range(n)]
     forcing = [f"f{i}" for i in range(n)] if n <= 2 else [f"rhs[{i}]" for i in range(n)]
     if n > 2:
         accel += [f"rhs = np.empty({n})"]
     accel += _assignments(forcing, list(chain.forcing), mapping, "c", trig)
     accel += _solve_lines(chain, mapping, forcing, "rhs", "out", "a", trig)
-
-    def body(lines):
-        return "\n".join("    " + line for line in lines)
 
     forces = f", c_1..c_{n}, A, Omega" if chain.forced else ""
     kind = "forced chain" if chain.forced else "chain"
@@ -268,7 +284,8 @@ import math
 import numba
 import numpy as np
 
-from pendulum_lab._signatures import ACCELERATION, HAMILTON
+from pendulum_lab._lane_math import LIMIT, lane_cos, lane_sin, lane_sincos
+from pendulum_lab._signatures import ACCELERATION, HAMILTON, STAGES
 from pendulum_lab.codegen import sincos, solve_spd
 
 #: Coordinates of the state (``q`` and ``p`` each have this many).
@@ -278,13 +295,81 @@ COORDINATES = {n}
 @numba.njit(HAMILTON, cache=True)
 def hamilton(t, q, p, params, dq, dp):
     """dq = M(q)^-1 p (= dH/dp); dp = dL/dq{plus_q} at omega = dq (= -dH/dq{plus_q})."""
-{body(hamilton)}
+{_indent(unpack + parameters + hamilton)}
 
 
 @numba.njit(ACCELERATION, cache=True)
 def acceleration(t, q, v, params, out):
     """out = M(q)^-1 {rhs}."""
-{body(accel)}
+{_indent(accel)}
+{stages}'''
+
+
+def _indent(lines: list[str], depth: int = 1) -> str:
+    return "\n".join("    " * depth + line for line in lines)
+
+
+# The field at each column of the states in turn, through a kernel of the
+# ``hamilton`` type called ``{field}`` (columns copied to contiguous vectors).
+_ONE_BY_ONE = '''
+
+@numba.njit(STAGES, cache=True)
+def {name}(ts, y, params, dy, work):
+    """``{field}`` at each column of ``y`` in turn (see pendulum_lab._signatures)."""
+    n = y.shape[0] // 2
+    for k in range(ts.size):
+        for i in range(2 * n):
+            work[i] = y[i, k]
+        {field}(ts[k], work[:n], work[n:2 * n], params, work[2 * n:3 * n], work[3 * n:])
+        for i in range(2 * n):
+            dy[i, k] = work[2 * n + i]
+'''
+
+
+def _lane_rewrites(n: int) -> list:
+    """How ``hamilton``'s lines read at column ``k`` of ``y = (q, p)`` and ``dy = (dq, dp)``."""
+    rows = {"q": ("y", 0), "p": ("y", n), "dq": ("dy", 0), "dp": ("dy", n)}
+
+    def subscript(match):
+        array, offset = rows[match[1]]
+        return f"{array}[{int(match[2]) + offset}, k]"
+
+    return [
+        (re.compile(r"\b(q|p|dq|dp)\[(\d+)\]"), subscript),
+        (re.compile(r"\bsincos\("), "lane_sincos("),
+        (re.compile(r"\bmath\.sin\("), "lane_sin("),
+        (re.compile(r"\bmath\.cos\("), "lane_cos("),
+    ]
+
+
+def _lane_source(parameters: list[str], unpack: list[str], hamilton: list[str],
+                 angles: list[sp.Expr]) -> str:
+    """The vectorized ``stages`` kernel: ``hamilton``'s lines in a loop over the columns.
+
+    ``angles`` are the arguments of every sine and cosine: a column where one
+    exceeds the lane functions' range (:data:`pendulum_lab._lane_math.LIMIT`)
+    makes the kernel evaluate all columns again through ``hamilton`` (a
+    branch per column inside the loop would stop the vectorization). The
+    division's check for zero is left to NumPy's rules (``error_model``),
+    for the same reason: a zero determinant gives infinities, which the
+    integrators report, not an exception.
+    """
+    body = ["t = ts[k]"] + unpack + hamilton
+    for pattern, replacement in _lane_rewrites(len(unpack)):
+        body = [pattern.sub(replacement, line) for line in body]
+    far = " | ".join(f"(abs({sp.pycode(angle)}) > LIMIT)" for angle in angles) or "False"
+    body += [f"far |= {far}"]
+    return f'''{_ONE_BY_ONE.format(name="_each_column", field="hamilton")}
+
+@numba.njit(STAGES, cache=True, error_model="numpy")
+def stages(ts, y, params, dy, work):
+    """hamilton at every column of y, 8 columns per pass (see pendulum_lab._lane_math)."""
+{_indent(parameters)}
+    far = False
+    for k in range(ts.size):
+{_indent(body, 2)}
+    if far:  # an angle beyond the lane functions' range (|x| > LIMIT): the C library's
+        _each_column(ts, y, params, dy, work)
 '''
 
 
@@ -327,7 +412,8 @@ def load_kernels(n: int, forced: bool = False, looped: bool | None = None) -> Si
     source = kernel_source(derive_chain(n, forced))
     module, path = load_generated(f"chain{n}_forced" if forced else f"chain{n}", source)
     return SimpleNamespace(hamilton=module.hamilton, acceleration=module.acceleration,
-                           source=source, path=path, module=module.__name__)
+                           stages=module.stages, source=source, path=path,
+                           module=module.__name__)
 
 
 def load_generated(stem: str, source: str, derived_from=(), inject: dict | None = None):
@@ -372,8 +458,36 @@ def looped_kernels() -> SimpleNamespace:
     from . import long_chains  # compiles (or loads) the kernels on first use
 
     return SimpleNamespace(hamilton=long_chains.hamilton, acceleration=long_chains.acceleration,
+                           stages=stage_kernel(long_chains.hamilton),
                            source=inspect.getsource(long_chains),
                            path=Path(long_chains.__file__), module=long_chains.__name__)
+
+
+def import_name(kernel) -> tuple[str, str]:
+    """The module and the name a compiled kernel is imported by (generated code imports it)."""
+    module, name = kernel.py_func.__module__, kernel.py_func.__name__
+    if getattr(sys.modules.get(module), name, None) is not kernel:
+        raise TypeError(f"the kernel {module}.{name} cannot be imported by that name: a kernel "
+                        "must be a module-level function of a module (generate it with "
+                        "codegen.load_generated), not a closure")
+    return module, name
+
+
+@functools.cache
+def stage_kernel(hamilton):
+    """A ``stages`` kernel for a field known only by its ``hamilton`` kernel: one column at a time.
+
+    For fields made outside :func:`kernel_source` (the long chains' looped
+    kernels, Henon's rescaled field). Generated into the kernel cache, like
+    the fields, so that Numba keeps it on disk.
+    """
+    module, name = import_name(hamilton)
+    source = (f'"""Generated by pendulum_lab.codegen: the stages kernel of {module}.{name}; '
+              'do not edit."""\nimport numba\n\nfrom pendulum_lab._signatures import STAGES\n'
+              f'from {module} import {name} as field\n')
+    source += _ONE_BY_ONE.format(name="stages", field="field")
+    stem = f"stages_{module.removeprefix('pendulum_lab_kernels_')}_{name}".replace(".", "_")
+    return load_generated(stem, source)[0].stages
 
 
 def parameters_array(masses, lengths, g) -> np.ndarray:

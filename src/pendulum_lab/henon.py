@@ -171,8 +171,9 @@ def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, m
     q_ext = np.column_stack([theta, np.full(len(theta), t0)])
     p_ext = np.column_stack([p, width])
     # not separable, and any damping is part of the rescaled field (no conformal splitting)
-    rescaled = HamiltonianField(_henon_kernel(n, model.forced, link), field.acceleration,
-                                field.params, False, 0.0)
+    kernel = _henon_kernel(n, model.forced, link)
+    rescaled = HamiltonianField(kernel, field.acceleration, field.params, False, 0.0,
+                                stages=codegen.stage_kernel(kernel))
     _step_rows(method, rescaled, q_ext, p_ext, 1.0, "Henon's step to the surface")
     if not np.all(np.isfinite(q_ext)) or not np.all(np.isfinite(p_ext)):
         raise FloatingPointError(

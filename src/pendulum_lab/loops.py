@@ -23,7 +23,6 @@ from __future__ import annotations
 import functools
 import math
 import re
-import sys
 
 import numba
 import numpy as np
@@ -187,16 +186,6 @@ def run(separable, damping_rates, q, p, t0, h, n_steps, first_step, save_every, 
 '''
 
 
-def _where(kernel) -> tuple[str, str]:
-    """The module and the name a compiled kernel is imported by (the generated loop imports it)."""
-    module, name = kernel.py_func.__module__, kernel.py_func.__name__
-    if getattr(sys.modules.get(module), name, None) is not kernel:
-        raise TypeError(f"the kernel {module}.{name} cannot be imported by that name: a kernel "
-                        "must be a module-level function of a module (generate it with "
-                        "codegen.load_generated), not a closure")
-    return module, name
-
-
 def loop_source(method: Method, first, second, n: int) -> str:
     """The generated module that compiles ``method``'s step with the kernels ``first``, ``second``.
 
@@ -204,7 +193,8 @@ def loop_source(method: Method, first, second, n: int) -> str:
     (:func:`~pendulum_lab.integrators.step_kernels`); ``n`` the number of coordinates.
     """
     step = method.kernel
-    (first_module, first_name), (second_module, second_name) = _where(first), _where(second)
+    (first_module, first_name), (second_module, second_name) = map(codegen.import_name,
+                                                                    (first, second))
     return _TEMPLATE.format(method=method.name, step=step.__qualname__, digest=step.digest,
                             first=f"{first_module}.{first_name}",
                             second=f"{second_module}.{second_name}", first_module=first_module,

@@ -130,7 +130,8 @@ def _field(n: int, forced: bool, params: tuple, separable: bool,
     # An unforced chain also has a discrete Lagrangian (variational methods).
     discrete = None if forced else functools.partial(codegen.load_discrete_kernels, n)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
-                            np.array(params, dtype=float), separable, damping_rate, discrete)
+                            np.array(params, dtype=float), separable, damping_rate, discrete,
+                            kernels.stages)
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
@@ -148,7 +149,8 @@ def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
     rates = np.broadcast_to(np.nan if rate is None else rate, model.shape)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
                             np.ascontiguousarray(rows.reshape(-1, rows.shape[-1])),
-                            model.separable, np.array(rates, dtype=float).reshape(-1))
+                            model.separable, np.array(rates, dtype=float).reshape(-1),
+                            stages=kernels.stages)
 
 
 def _check_method_fits(model: PendulumModel, method: Method, field: HamiltonianField):

@@ -1,0 +1,203 @@
+"""The fields' ``stages`` kernels: every stage of an implicit step in one call.
+
+For one or two links the kernel is vectorized and computes sines and cosines
+with :mod:`pendulum_lab._lane_math` instead of the C library; elsewhere it
+calls ``hamilton`` column by column. Both must give ``hamilton``'s values.
+"""
+
+import math
+from fractions import Fraction
+
+import mpmath
+import numba
+import numpy as np
+import pytest
+
+import pendulum_lab as pl
+from pendulum_lab import _lane_math, codegen
+from pendulum_lab.integrators import EPSILON, _roundoff_status, stage_lanes
+from pendulum_lab.simulate import hamiltonian_field
+
+RNG = np.random.default_rng(20261130)
+
+
+@numba.njit
+def _worst_ulps(xs):
+    """Largest difference of lane_sincos from math.sin/math.cos, in units of the last place."""
+    worst = 0.0
+    for x in xs:
+        s, c = _lane_math.lane_sincos(x)
+        sine, cosine = math.sin(x), math.cos(x)
+        worst = max(worst, abs(s - sine) / np.spacing(abs(sine)),
+                    abs(c - cosine) / np.spacing(abs(cosine)))
+    return worst
+
+
+def test_lane_sine_and_cosine_agree_with_the_c_library_to_two_units_in_the_last_place():
+    for size in (1.0, 4.0, 1e3, _lane_math.LIMIT):
+        assert _worst_ulps(RNG.uniform(-size, size, 200_000)) <= 2.0
+    # where the reduced argument is tiny (next to multiples of pi/2) the results are tiny
+    # too, and still right to their last places
+    multiples = np.arange(-60_000, 60_000) * (np.pi / 2)
+    assert _worst_ulps(multiples) <= 2.0
+    assert _worst_ulps(np.nextafter(multiples, np.inf)) <= 2.0
+
+
+def test_lane_sine_loses_accuracy_beyond_its_limit():
+    # negative control for the test above and the reason for LIMIT: far out,
+    # the three-part pi/2 no longer reduces exactly
+    assert _worst_ulps(RNG.uniform(1e15, 1e16, 10_000)) > 1e3
+
+
+def test_the_three_parts_of_half_pi_add_up_and_the_first_two_multiply_exactly():
+    mpmath.mp.prec = 200
+    total = sum(mpmath.mpf(part) for part in (_lane_math.HALF_PI_1, _lane_math.HALF_PI_2,
+                                              _lane_math.HALF_PI_3))
+    assert abs(total - mpmath.pi / 2) < mpmath.mpf(10) ** -36
+    for part in (_lane_math.HALF_PI_1, _lane_math.HALF_PI_2):
+        mantissa = Fraction(math.frexp(part)[0])  # in [1/2, 1)
+        assert (mantissa * 2**33).denominator == 1  # 33 significant bits: k * part is exact
+    assert (Fraction(_lane_math.HALF_PI_3) * 2**200).denominator == 1
+
+
+def _columns(n, lanes, size=3.0):
+    """Random states (q, p) as the columns of a (2 n, lanes) array, and their times."""
+    return RNG.uniform(0.0, 50.0, lanes), RNG.uniform(-size, size, (2 * n, lanes))
+
+
+def _hamilton_by_column(field, ts, y, hamilton=None):
+    """``field.hamilton`` (or the kernel ``hamilton``) called at each column of ``y``."""
+    n = y.shape[0] // 2
+    out = np.empty_like(y)
+    for k in range(y.shape[1]):
+        dq, dp = np.empty(n), np.empty(n)
+        (hamilton or field.hamilton)(ts[k], y[:n, k].copy(), y[n:, k].copy(), field.params, dq,
+                                     dp)
+        out[:n, k], out[n:, k] = dq, dp
+    return out
+
+
+def _stages(field, ts, y):
+    dy = np.empty_like(y)
+    field.stages(ts, y, field.params, dy, np.empty(2 * y.shape[0]))
+    return dy
+
+
+MODELS = {
+    "simple": pl.simple_pendulum(mass=1.3, length=0.7, g=9.81),
+    "double": pl.double_pendulum(m1=1.0, m2=2.0, l1=1.5, l2=0.5, g=9.81),
+    "driven double": pl.n_pendulum(2, masses=(1.0, 2.0), lengths=(1.5, 0.5), damping=0.3,
+                                   drive_amplitude=1.2, drive_frequency=0.7),
+}
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_vectorized_stages_give_hamilton_at_every_column(name):
+    field = hamiltonian_field(MODELS[name])
+    n = MODELS[name].n
+    for lanes in (1, 2, 8, 16, 13):  # shorter than a pass, whole passes, and a remainder
+        ts, y = _columns(n, lanes)
+        expected = _hamilton_by_column(field, ts, y)
+        got = _stages(field, ts, y)
+        # the sines differ from the C library's by an ulp or two: a few ulps of the result
+        scale = np.max(np.abs(expected), axis=1, keepdims=True)
+        assert np.max(np.abs(got - expected) / scale) < 1e-14
+        if lanes > 1:  # negative control: the columns must not be interchangeable
+            assert np.max(np.abs(got[:, ::-1] - expected) / scale) > 1e-3
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_angles_beyond_the_lane_functions_range_are_computed_by_the_c_library(name):
+    field = hamiltonian_field(MODELS[name])
+    n = MODELS[name].n
+    ts, y = _columns(n, 8)
+    y[0, 3] += 2 * np.pi * 40_000  # about 2.5e5 rad in one column, beyond LIMIT
+    assert abs(y[0, 3]) > _lane_math.LIMIT
+    # every column then comes from hamilton itself, to the last bit
+    np.testing.assert_array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
+    # negative control: within range, the vectorized functions differ in some last bits
+    y[0, 3] -= 2 * np.pi * 40_000
+    assert not np.array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
+
+
+@pytest.mark.parametrize("n, looped", [(3, False), (3, True), (6, True)])
+def test_column_by_column_stages_of_longer_chains_are_hamilton_exactly(n, looped):
+    kernels = codegen.load_kernels(n, looped=looped)
+    field = hamiltonian_field(pl.n_pendulum(n))
+    assert field.stages is kernels.stages or not looped
+    ts, y = _columns(n, 8, size=1.0)
+    dy = np.empty_like(y)
+    kernels.stages(ts, y, field.params, dy, np.empty(4 * n))
+    expected = _hamilton_by_column(field, ts, y, kernels.hamilton)
+    np.testing.assert_array_equal(dy, expected)
+    assert not np.array_equal(dy[:, ::-1], expected)  # negative control: columns matter
+
+
+def test_stage_kernel_of_a_field_made_elsewhere_calls_its_hamilton():
+    # the kernel generated around any hamilton kernel (Henon's rescaled field uses it)
+    field = hamiltonian_field(MODELS["double"])
+    stages = codegen.stage_kernel(field.hamilton)
+    ts, y = _columns(2, 5)
+    dy = np.empty_like(y)
+    stages(ts, y, field.params, dy, np.empty(8))
+    np.testing.assert_array_equal(dy, _hamilton_by_column(field, ts, y))
+    assert codegen.stage_kernel(field.hamilton) is stages  # generated once
+
+
+def test_implicit_steps_pad_the_stages_to_whole_passes():
+    assert [stage_lanes(s) for s in (1, 2, 3, 4, 6, 8, 9)] == [1, 2, 8, 8, 8, 8, 16]
+
+
+@pytest.mark.parametrize("method", ["glrk8", "glrk12"])
+def test_gauss_steps_through_the_stage_kernel_keep_their_order(method):
+    # the error at t = 1 of the double pendulum falls by 2^order per halving of dt
+    # (the truth: glrk12 at a step far below those tested)
+    model, start = MODELS["double"], ([1.0, 1.5], [0.0, 0.0])
+    truth = pl.simulate(model, *start, t_end=1.0, dt=1 / 256, method="glrk12").theta[-1]
+    errors = [np.max(np.abs(pl.simulate(model, *start, t_end=1.0, dt=dt,
+                                        method=method).theta[-1] - truth))
+              for dt in (1 / 8, 1 / 16)]
+    order = np.log2(errors[0] / errors[1])
+    expected = pl.get_method(method).order
+    assert expected - 1.0 < order < expected + 1.5
+
+
+# ------------------------------------------------------------- the stopping rule, vectorized
+def _reference_roundoff_status(new, old, smallest):
+    """The rule of ``_roundoff_status`` in exact rational arithmetic (a plain-Python oracle)."""
+    rate, worst, measured, first = Fraction(0), Fraction(0), False, False
+    updated = smallest.copy()
+    for x, y, previous in zip(new, old, smallest):
+        delta, size = abs(x - y), abs(x)
+        unknown = math.isinf(previous)
+        first |= unknown
+        if not unknown and previous > 256.0 * EPSILON * size:
+            measured = True
+            rate = max(rate, Fraction(delta) / Fraction(previous))
+        if delta < previous and delta > 0.0:
+            worst = max(worst, Fraction(delta) / Fraction(size) if size else math.inf)
+    for i, (x, y) in enumerate(zip(new, old)):
+        updated[i] = min(abs(x - y), smallest[i])
+    if worst == 0:
+        return 1, updated
+    # an infinite relative increment (a component of size 0 still moving) is never done
+    done = (measured and not first and rate < 1 and worst != math.inf
+            and rate * worst <= Fraction(EPSILON) / 2 * (1 - rate))
+    return (1 if done else 0), updated
+
+
+def test_vectorized_stopping_rule_decides_as_the_exact_rule():
+    decisions = {0: 0, 1: 0}
+    for _ in range(3000):
+        new = RNG.uniform(-3, 3, 24)
+        scale = RNG.choice([1e-18, 1e-17, 1e-16, 1e-15, 1e-14, 1e-13], 24)
+        old = new * (1 + scale * RNG.choice([-1.0, 1.0], 24))
+        smallest = RNG.choice([np.inf, 1e-13, 1e-14, 1e-15, 3e-16, 1e-16, 0.0], 24)
+        got_smallest = smallest.copy()
+        got = _roundoff_status(new, old, got_smallest)
+        expected, expected_smallest = _reference_roundoff_status(new, old, smallest)
+        assert got == expected
+        np.testing.assert_array_equal(got_smallest, expected_smallest)
+        decisions[got] += 1
+    # both outcomes occur, so the comparison covers both
+    assert min(decisions.values()) > 20
