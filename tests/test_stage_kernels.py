@@ -201,3 +201,22 @@ def test_vectorized_stopping_rule_decides_as_the_exact_rule():
         decisions[got] += 1
     # both outcomes occur, so the comparison covers both
     assert min(decisions.values()) > 20
+
+
+def test_stopping_rule_takes_a_component_moving_off_zero_as_not_done():
+    # a slope that is exactly 0 now and was not before has an infinite relative
+    # increment: not done (and no ZeroDivisionError, which a 20-link chain from
+    # rest met through the momenta of its first sweeps)
+    new, old = np.array([0.0, 1.0]), np.array([1e-17, 1.0])
+    assert _roundoff_status(new, old, np.array([1e-15, 0.0])) == 0
+    assert _reference_roundoff_status(new, old, np.array([1e-15, 0.0]))[0] == 0
+    # negative control: once it stays at 0 (no increment), it is done
+    assert _roundoff_status(new, new.copy(), np.array([1e-15, 0.0])) == 1
+
+
+def test_a_twenty_link_chain_from_rest_takes_gauss_steps():
+    # the chain of benchmark item 13: its momenta start at exactly 0
+    trajectory = pl.simulate(pl.n_pendulum(20), np.full(20, 0.5), np.zeros(20), t_end=0.2,
+                             dt=0.01, method="glrk4")
+    assert trajectory.completed and np.all(np.isfinite(trajectory.theta))
+    assert np.max(np.abs(trajectory.relative_energy_error)) < 1e-6

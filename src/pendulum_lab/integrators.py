@@ -273,7 +273,7 @@ def fixed_point_status(new, old, smallest, floor=0.0):
     return _roundoff_status(new, old, smallest)
 
 
-@numba.njit
+@numba.njit(error_model="numpy")  # x / 0 is inf, as intended below, not ZeroDivisionError
 def _roundoff_status(new, old, smallest):
     """:func:`fixed_point_status` once every increment is tiny: stalled, or predicted done?"""
     # rate: the largest ratio of an increment to the one before it, over the
