@@ -12,6 +12,7 @@ energy floor of a long ``glrk8`` run, before (plain update) and after
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -122,9 +123,13 @@ def bench_per_eval(cfg: Config, cloop: c_yardstick.CLoop | None) -> Section:
         ratio = after / c_ns
         data["methods"][method] = {"after": after, "before": before, "ratio": ratio,
                                    "before_ratio": before / c_ns}
+        # a method added after BEFORE has no "before" (glrk12)
+        was = (f"before {before:.0f} ns" if math.isfinite(before)
+               else f"not in {BEFORE}" if "before" in results else "before: not run")
+        was_ratio = f"before {before / c_ns:.2f}x" if math.isfinite(before) else "-"
         rows.append(Row(
-            "10", f"per evaluation, {method}", f"{after:.0f} ns (before {before:.0f} ns)",
-            f"C RK4 {c_ns:.0f} ns", f"{ratio:.2f}x (before {before / c_ns:.2f}x)",
+            "10", f"per evaluation, {method}", f"{after:.0f} ns ({was})",
+            f"C RK4 {c_ns:.0f} ns", f"{ratio:.2f}x ({was_ratio})",
             f"ours/C <= {TARGET:g} (CPU)",
             verdict(ratio, TARGET) if "C" in results else "not available",
         ))
