@@ -71,6 +71,7 @@ __all__ = [
     "load_generated",
     "load_kernels",
     "looped_kernels",
+    "package_files",
     "paired_trig",
     "parameters_array",
     "sincos",
@@ -410,7 +411,9 @@ def load_kernels(n: int, forced: bool = False, looped: bool | None = None) -> Si
     if looped if looped is not None else n > UNROLLED_MAX_LINKS:
         return looped_kernels()
     source = kernel_source(derive_chain(n, forced))
-    module, path = load_generated(f"chain{n}_forced" if forced else f"chain{n}", source)
+    # the stages kernel inlines _lane_math's functions: a change there must give a new file
+    module, path = load_generated(f"chain{n}_forced" if forced else f"chain{n}", source,
+                                  derived_from=("_lane_math.py",))
     return SimpleNamespace(hamilton=module.hamilton, acceleration=module.acceleration,
                            stages=module.stages, source=source, path=path,
                            module=module.__name__)
@@ -473,6 +476,24 @@ def import_name(kernel) -> tuple[str, str]:
     return module, name
 
 
+def package_files(*kernels) -> tuple[str, ...]:
+    """The package's source files that define ``kernels`` (generated modules excluded).
+
+    Code generated around a kernel (a time loop, a ``stages`` kernel) is
+    cached by Numba, which checks only the generated file: a kernel from a
+    package module (``long_chains.py``) must therefore be part of that file's
+    digest (``derived_from`` of :func:`load_generated`), or a change in it would
+    leave stale machine code. A generated kernel's module name carries its own
+    digest already.
+    """
+    files = []
+    for kernel in kernels:
+        module = kernel.py_func.__module__
+        if module.startswith("pendulum_lab."):
+            files.append(module.removeprefix("pendulum_lab.").replace(".", "/") + ".py")
+    return tuple(dict.fromkeys(files))
+
+
 @functools.cache
 def stage_kernel(hamilton):
     """A ``stages`` kernel for a field known only by its ``hamilton`` kernel: one column at a time.
@@ -487,7 +508,7 @@ def stage_kernel(hamilton):
               f'from {module} import {name} as field\n')
     source += _ONE_BY_ONE.format(name="stages", field="field")
     stem = f"stages_{module.removeprefix('pendulum_lab_kernels_')}_{name}".replace(".", "_")
-    return load_generated(stem, source)[0].stages
+    return load_generated(stem, source, derived_from=package_files(hamilton))[0].stages
 
 
 def parameters_array(masses, lengths, g) -> np.ndarray:

@@ -207,7 +207,9 @@ def _load(method: Method, step: Step, first, second, n: int):
     stem = first.py_func.__module__.removeprefix("pendulum_lab_kernels_")
     stem = f"{stem}_{re.sub(r'[^A-Za-z0-9_]', '_', method.name)}"
     module, _ = codegen.load_generated(stem, loop_source(method, first, second, n),
-                                       derived_from=("loops.py",), inject={"step": step.compiled})
+                                       derived_from=("loops.py", *codegen.package_files(first,
+                                                                                        second)),
+                                       inject={"step": step.compiled})
     return module.run
 
 
