@@ -170,6 +170,15 @@ def _plain_symbols(chain: Chain):
     return th, w, pars, mapping
 
 
+def _trig_functions(exprs: list[sp.Expr], mapping: dict) -> dict:
+    """``{angle: {sin, cos} or one of them}``: the trigonometry of ``exprs`` after ``mapping``."""
+    kinds: dict = {}
+    for expr in exprs:
+        for call in sp.sympify(expr).xreplace(mapping).atoms(sp.sin, sp.cos):
+            kinds.setdefault(call.args[0], set()).add(call.func)
+    return kinds
+
+
 def paired_trig(exprs: list[sp.Expr], mapping: dict) -> tuple[list[tuple], dict]:
     """The angles whose sine and cosine ``exprs`` both need, to compute them together.
 
@@ -180,10 +189,7 @@ def paired_trig(exprs: list[sp.Expr], mapping: dict) -> tuple[list[tuple], dict]
     yardstick of the benchmarks with C's ``sincos``, so that both do the same
     arithmetic.
     """
-    kinds: dict = {}
-    for expr in exprs:
-        for call in sp.sympify(expr).xreplace(mapping).atoms(sp.sin, sp.cos):
-            kinds.setdefault(call.args[0], set()).add(call.func)
+    kinds = _trig_functions(exprs, mapping)
     pairs, substitution = [], {}
     for k, angle in enumerate(sorted((x for x, f in kinds.items() if len(f) == 2), key=str)):
         sine, cosine = sp.Symbol(f"sin{k}", real=True), sp.Symbol(f"cos{k}", real=True)
@@ -258,9 +264,7 @@ def kernel_source(chain: Chain) -> str:
     hamilton += _assignments([f"dp[{i}]" for i in range(n)], list(momentum_rates), mapping, "b",
                              trig)
     if n <= UNROLLED_MAX_LINKS:
-        angles = sorted({call.args[0] for e in mass + list(momentum_rates)
-                         for call in sp.sympify(e).xreplace(mapping).atoms(sp.sin, sp.cos)},
-                        key=str)
+        angles = sorted(_trig_functions(mass + list(momentum_rates), mapping), key=str)
         stages = _lane_source(parameters, unpack, hamilton, angles)
     else:
         stages = _ONE_BY_ONE.format(name="stages", field="hamilton")
@@ -318,10 +322,11 @@ _ONE_BY_ONE = '''
 def {name}(ts, y, params, dy, work):
     """``{field}`` at each column of ``y`` in turn (see pendulum_lab._signatures)."""
     n = y.shape[0] // 2
+    q, p, dq, dp = work[:n], work[n:2 * n], work[2 * n:3 * n], work[3 * n:]
     for k in range(ts.size):
         for i in range(2 * n):
             work[i] = y[i, k]
-        {field}(ts[k], work[:n], work[n:2 * n], params, work[2 * n:3 * n], work[3 * n:])
+        {field}(ts[k], q, p, params, dq, dp)
         for i in range(2 * n):
             dy[i, k] = work[2 * n + i]
 '''
