@@ -121,6 +121,42 @@ def test_angles_beyond_the_lane_functions_range_are_computed_by_the_c_library(na
     assert not np.array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
 
 
+@pytest.mark.parametrize("name", list(MODELS))
+def test_fewer_columns_than_a_vector_pass_are_computed_by_the_c_library(name):
+    # as scalar code the lane functions cost more than the C library (glrk4's two stages)
+    field = hamiltonian_field(MODELS[name])
+    n = MODELS[name].n
+    for lanes in range(1, _lane_math.LANE_GROUP):
+        ts, y = _columns(n, lanes)
+        np.testing.assert_array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
+    # negative control: whole passes go through the lane functions (some last bits differ)
+    ts, y = _columns(n, 8 * _lane_math.LANE_GROUP)
+    assert not np.array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
+
+
+def _assembly(function, *args):
+    function(*args)
+    return function.inspect_asm(function.signatures[0])
+
+
+def test_align_stack_makes_a_kernel_realign_its_stack_frame():
+    # LLVM gives 64-byte spill slots their alignment only in a realigned frame (see
+    # codegen.align_stack); the stage kernels and the time loops call it
+    def body(x):
+        return math.sin(x) + 1.0
+
+    def aligned(x):
+        codegen.align_stack()
+        return math.sin(x) + 1.0
+
+    realign = "andq\t$-64, %rsp"
+    assert realign in _assembly(numba.njit(aligned), 0.5)
+    assert realign not in _assembly(numba.njit(body), 0.5)  # negative control
+    source = codegen.kernel_source(pl.double_pendulum().chain)
+    assert source.count("align_stack()") == 1
+    assert "def stages" in source.split("align_stack()")[0].rsplit("@numba.njit", 1)[1]
+
+
 @pytest.mark.parametrize("n, looped", [(3, False), (3, True), (6, True)])
 def test_column_by_column_stages_of_longer_chains_are_hamilton_exactly(n, looped):
     kernels = codegen.load_kernels(n, looped=looped)

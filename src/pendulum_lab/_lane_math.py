@@ -28,6 +28,12 @@ import math
 
 import numba
 
+#: The stages of an implicit step are evaluated in groups of this many
+#: (unused ones at the step's start): a ``stages`` kernel's loop is vectorized
+#: 8 iterations at a time, whatever the SIMD width (2, 4 or 8 doubles,
+#: interleaved), and a shorter loop stays scalar.
+LANE_GROUP = 8
+
 #: Arguments up to this size are reduced exactly enough (``k < 2^20``, with margin).
 LIMIT = 1.0e5
 

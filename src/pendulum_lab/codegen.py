@@ -58,6 +58,7 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from ._lane_math import LANE_GROUP
 from ._signatures import VECTOR
 from .discrete_mechanics import DiscreteLagrangian, discrete_lagrangian
 from .mechanics import Chain, derive_chain
@@ -121,6 +122,32 @@ def _c_library_has_sincos() -> bool:
 
 #: Whether the C math library has ``sincos`` (glibc does; it is not standard C).
 HAVE_SINCOS = _c_library_has_sincos()
+
+
+@intrinsic
+def align_stack(typingctx):
+    """Align the calling kernel's stack frame to 64 bytes (a no-op where it is called).
+
+    A loop vectorized with 512-bit registers spills some of them to the
+    stack. Unless the function asks for an aligned frame before its registers
+    are allocated, LLVM can only give the spill slots the 16-byte alignment
+    that the calling convention guarantees, and then the speed depends on
+    where the operating system happened to place the stack: the
+    double pendulum's 8-column field took 100 ns in some processes and
+    160-170 ns in others (each 64-byte spill split over two cache lines).
+    Setting the function's ``alignstack`` attribute makes its prologue
+    realign the stack, so that every process gets the fast placement.
+    """
+
+    def codegen(context, builder, sig, args):
+        attributes = builder.function.attributes
+        attributes.alignstack = 64
+        # llvmlite prints ``alignstack`` only beside another attribute; Numba's
+        # functions return errors as values and never unwind
+        attributes.add("nounwind")
+        return context.get_dummy_value()
+
+    return types.none(), codegen
 
 
 @intrinsic
@@ -291,7 +318,7 @@ import numpy as np
 
 from pendulum_lab._lane_math import LIMIT, lane_cos, lane_sin, lane_sincos
 from pendulum_lab._signatures import ACCELERATION, HAMILTON, STAGES
-from pendulum_lab.codegen import sincos, solve_spd
+from pendulum_lab.codegen import align_stack, sincos, solve_spd
 
 #: Coordinates of the state (``q`` and ``p`` each have this many).
 COORDINATES = {n}
@@ -332,7 +359,7 @@ def {name}(ts, y, params, dy, work):
 '''
 
 
-def _lane_rewrites(n: int) -> list:
+def _column_rewrites(n: int) -> list:
     """How ``hamilton``'s lines read at column ``k`` of ``y = (q, p)`` and ``dy = (dq, dp)``."""
     rows = {"q": ("y", 0), "p": ("y", n), "dq": ("dy", 0), "dp": ("dy", n)}
 
@@ -340,42 +367,59 @@ def _lane_rewrites(n: int) -> list:
         array, offset = rows[match[1]]
         return f"{array}[{int(match[2]) + offset}, k]"
 
-    return [
-        (re.compile(r"\b(q|p|dq|dp)\[(\d+)\]"), subscript),
-        (re.compile(r"\bsincos\("), "lane_sincos("),
-        (re.compile(r"\bmath\.sin\("), "lane_sin("),
-        (re.compile(r"\bmath\.cos\("), "lane_cos("),
-    ]
+    return [(re.compile(r"\b(q|p|dq|dp)\[(\d+)\]"), subscript)]
+
+
+#: The lane functions in place of the C library's (:mod:`pendulum_lab._lane_math`).
+_LANE_TRIG = [
+    (re.compile(r"\bsincos\("), "lane_sincos("),
+    (re.compile(r"\bmath\.sin\("), "lane_sin("),
+    (re.compile(r"\bmath\.cos\("), "lane_cos("),
+]
+
+
+def _rewrite(lines: list[str], rewrites: list) -> list[str]:
+    for pattern, replacement in rewrites:
+        lines = [pattern.sub(replacement, line) for line in lines]
+    return lines
 
 
 def _lane_source(parameters: list[str], unpack: list[str], hamilton: list[str],
                  angles: list[sp.Expr]) -> str:
     """The vectorized ``stages`` kernel: ``hamilton``'s lines in a loop over the columns.
 
-    ``angles`` are the arguments of every sine and cosine: a column where one
-    exceeds the lane functions' range (:data:`pendulum_lab._lane_math.LIMIT`)
-    makes the kernel evaluate all columns again through ``hamilton`` (a
-    branch per column inside the loop would stop the vectorization). The
-    division's check for zero is left to NumPy's rules (``error_model``),
-    for the same reason: a zero determinant gives infinities, which the
+    The loop is written twice from the same lines: with the lane functions
+    (:mod:`pendulum_lab._lane_math`), which the compiler vectorizes, and with
+    the C library's sines and cosines, for what the lane loop does not serve.
+    That is fewer columns than one vector pass (``LANE_GROUP``): as scalar
+    code the lane functions always reduce and evaluate both series, which
+    made ``glrk4``'s two stages 14-17 % slower than the C library. And it is
+    a column where an argument of a sine or cosine exceeds the lane
+    functions' range (``LIMIT``): then all columns are evaluated again, since
+    a branch per column inside the loop would stop the vectorization. The
+    division's check for zero is left to NumPy's rules (``error_model``), for
+    the same reason: a zero determinant gives infinities, which the
     integrators report, not an exception.
     """
-    body = ["t = ts[k]"] + unpack + hamilton
-    for pattern, replacement in _lane_rewrites(len(unpack)):
-        body = [pattern.sub(replacement, line) for line in body]
+    body = _rewrite(["t = ts[k]"] + unpack + hamilton, _column_rewrites(len(unpack)))
     far = " | ".join(f"(abs({sp.pycode(angle)}) > LIMIT)" for angle in angles) or "False"
-    body += [f"far |= {far}"]
-    return f'''{_ONE_BY_ONE.format(name="_each_column", field="hamilton")}
+    lanes = _rewrite(body, _LANE_TRIG) + [f"far |= {far}"]
+    return f'''
 
 @numba.njit(STAGES, cache=True, error_model="numpy")
 def stages(ts, y, params, dy, work):
-    """hamilton at every column of y, 8 columns per pass (see pendulum_lab._lane_math)."""
+    """hamilton at every column of y, {LANE_GROUP} columns per pass (pendulum_lab._lane_math)."""
+    align_stack()
 {_indent(parameters)}
-    far = False
+    if ts.size >= {LANE_GROUP}:
+        far = False
+        for k in range(ts.size):
+{_indent(lanes, 3)}
+        if not far:
+            return
+    # fewer columns than a vector pass, or an angle beyond LIMIT: the C library's
     for k in range(ts.size):
 {_indent(body, 2)}
-    if far:  # an angle beyond the lane functions' range (|x| > LIMIT): the C library's
-        _each_column(ts, y, params, dy, work)
 '''
 
 

@@ -90,6 +90,7 @@ from numba import types
 from numba.extending import intrinsic
 
 from . import _validation as check
+from ._lane_math import LANE_GROUP
 from .discrete_mechanics import RULES
 from .tableau import ButcherTableau, gauss_legendre_tableau
 
@@ -388,13 +389,6 @@ def explicit_rk(hamilton, t, q, p, h, params, a, b, c, work):
             q1[m] += h * b[i] * work[2 * i * n + m]
             p1[m] += h * b[i] * work[(2 * i + 1) * n + m]
     return q1, p1
-
-
-#: The stages of an implicit step are evaluated in groups of this many
-#: (unused ones at the step's start): the field's ``stages`` kernel is one loop
-#: that LLVM vectorizes 8 iterations at a time, whatever the SIMD width
-#: (2, 4 or 8 doubles, interleaved), and leaves a shorter loop scalar.
-LANE_GROUP = 8
 
 
 def stage_lanes(stages: int) -> int:

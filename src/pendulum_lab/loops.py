@@ -167,6 +167,7 @@ The step ({step}, digest {digest}) is set by pendulum_lab.loops before this runs
 """
 import numba
 
+from pendulum_lab.codegen import align_stack
 from pendulum_lab.loops import time_loop
 from {first_module} import {first_name} as first_kernel
 from {second_module} import {second_name} as second_kernel
@@ -179,6 +180,7 @@ COORDINATES = {n}
 def run(separable, damping_rates, q, p, t0, h, n_steps, first_step, save_every, params, saved_q,
         saved_p, stats, memory):
     """time_loop(step, first_kernel, second_kernel, ...) with this module's step and kernels."""
+    align_stack()  # the steps' vectorized loops spill 64-byte registers to the stack
     if q.shape[1] != COORDINATES or p.shape[1] != COORDINATES:
         raise ValueError("the states do not have this loop's number of coordinates")
     time_loop(step, first_kernel, second_kernel, COORDINATES, separable, damping_rates, q, p, t0,
