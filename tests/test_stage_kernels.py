@@ -15,7 +15,13 @@ import pytest
 
 import pendulum_lab as pl
 from pendulum_lab import _lane_math, codegen
-from pendulum_lab.integrators import EPSILON, _roundoff_status, stage_lanes
+from pendulum_lab.integrators import (
+    EPSILON,
+    _bits_float,
+    _float_bits,
+    _roundoff_status,
+    stage_lanes,
+)
 from pendulum_lab.simulate import hamiltonian_field
 
 RNG = np.random.default_rng(20261130)
@@ -247,6 +253,28 @@ def test_vectorized_stopping_rule_decides_as_the_exact_rule():
         decisions[got] += 1
     # both outcomes occur, so the comparison covers both
     assert min(decisions.values()) > 20
+
+
+@numba.njit
+def _bits_and_back(xs):
+    bits = np.empty(xs.size, np.int64)
+    back = np.empty_like(xs)
+    for i in range(xs.size):
+        bits[i] = _float_bits(xs[i])
+        back[i] = _bits_float(bits[i])
+    return bits, back
+
+
+def test_the_stopping_rule_takes_maxima_over_bits_that_order_as_the_numbers():
+    # _roundoff_status takes its maxima over the bits of non-negative floats as integers
+    xs = np.concatenate([[0.0, 5e-324, 1e-300, EPSILON, 1.0, 1e300, np.inf],
+                         RNG.uniform(0.0, 10.0, 2000) * 10.0 ** RNG.integers(-300, 300, 2000)])
+    bits, back = _bits_and_back(xs)
+    np.testing.assert_array_equal(back, xs)
+    np.testing.assert_array_equal(np.argsort(bits, kind="stable"), np.argsort(xs, kind="stable"))
+    # negative control: for negative numbers the order of the bits is not theirs
+    bits, _ = _bits_and_back(-xs)
+    assert not np.array_equal(np.argsort(bits, kind="stable"), np.argsort(-xs, kind="stable"))
 
 
 def test_stopping_rule_takes_a_component_moving_off_zero_as_not_done():

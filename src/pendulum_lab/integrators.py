@@ -274,6 +274,24 @@ def fixed_point_status(new, old, smallest, floor=0.0):
     return _roundoff_status(new, old, smallest)
 
 
+@intrinsic
+def _float_bits(typingctx, x):
+    """The bits of a float64 as an int64: for ``x >= 0`` they order as ``x`` does."""
+    def codegen(context, builder, sig, args):
+        return builder.bitcast(args[0], context.get_value_type(types.int64))
+
+    return types.int64(types.float64), codegen
+
+
+@intrinsic
+def _bits_float(typingctx, bits):
+    """The float64 whose bits are ``bits`` (the inverse of :func:`_float_bits`)."""
+    def codegen(context, builder, sig, args):
+        return builder.bitcast(args[0], context.get_value_type(types.float64))
+
+    return types.float64(types.int64), codegen
+
+
 @numba.njit(error_model="numpy")  # x / 0 is inf, as intended below, not ZeroDivisionError
 def _roundoff_status(new, old, smallest):
     """:func:`fixed_point_status` once every increment is tiny: stalled, or predicted done?"""
@@ -283,10 +301,13 @@ def _roundoff_status(new, old, smallest):
     # worst: the largest relative increment among components still improving.
     # Every quantity is computed for every component and then selected, with
     # no branch and no running comparison between components, so that the
-    # loop vectorizes: an earlier version compared fractions by cross products
-    # to save the divisions, and its chain of selects cost 2.6 times as much
-    # (measured on 32 components; the decisions agree).
-    rate, worst = 0.0, 0.0
+    # loop vectorizes (an earlier version compared fractions by cross
+    # products, and its chain of selects cost 2.6 times as much). Both
+    # maxima are taken over the quantities' bits as integers: they are never
+    # negative, so their bits order as they do, and LLVM vectorizes an
+    # integer maximum but not a floating-point one, whose NaN rules forbid
+    # reordering it (3 times as fast on 32 components, measured).
+    rate_bits, worst_bits = 0, 0
     measured, first = False, False
     for i in range(new.size):
         x = new[i]
@@ -297,14 +318,13 @@ def _roundoff_status(new, old, smallest):
         measured |= counts
         # the divisors are replaced where the quotient is not used (no 0 / 0)
         ratio = delta / (previous if counts else 1.0)
-        ratio = ratio if counts else 0.0
-        rate = ratio if ratio > rate else rate
+        rate_bits = max(rate_bits, _float_bits(ratio if counts else 0.0))
         improving = delta < previous
         smallest[i] = delta if improving else previous
         grows = improving & (delta > 0.0)  # size 0: an infinite relative increment
         relative = delta / (size if grows else 1.0)
-        relative = relative if grows else 0.0
-        worst = relative if relative > worst else worst
+        worst_bits = max(worst_bits, _float_bits(relative if grows else 0.0))
+    rate, worst = _bits_float(rate_bits), _bits_float(worst_bits)
     if worst == 0.0:  # every component stalled or exactly unchanged
         return 1
     # the improving ones are done if rate / (1 - rate) * worst < half an ulp
