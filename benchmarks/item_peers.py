@@ -37,16 +37,9 @@ from harness import (
 from item_long_run import _largest_passing
 
 import pendulum_lab as pl
-from pendulum_lab.integrators import Method, gauss_legendre_tableau
 
 #: Methods tried for "our fastest symplectic method".
-OURS = ("glrk8", "glrk12")
-#: Not registered (not part of the course): Gauss-Legendre with 8 stages, order 16, made
-#: from its tableau and stepped by the same code as the others. Its 8 stages fill the
-#: 8 columns the stages are evaluated in (glrk12 leaves 2 of them empty); reported for
-#: information, as what one more tableau would give.
-PROBE = Method.from_tableau("glrk16", gauss_legendre_tableau(8),
-                            "eight-stage Gauss-Legendre collocation (order 16, implicit)")
+OURS = ("glrk8", "glrk12", "glrk16")
 
 
 def _our_runner(dp, theta0, omega0):
@@ -147,7 +140,7 @@ def bench_heyoka(cfg: Config) -> Section:
         "compiled loop's first load is not. Ours: `pl.simulate` with energies at every step. "
         "Requirement: max relative energy error <= the target over the whole run."
     ]
-    for method in (*OURS, PROBE):
+    for method in OURS:
         run_ours(method, 0.1, 1.0)  # load the compiled loops
     for requirement in cfg.peer_requirements:
         tols, chosen = [], None
@@ -209,14 +202,9 @@ def bench_heyoka(cfg: Config) -> Section:
                 rows.append(Row("11", f"  other method for <= {requirement:g}: {method}",
                                 f"dt={v['dt']:.4g}: {fmt_time(v['seconds'])} (search run)",
                                 "-", f"{v['seconds'] / t_peer:.2f}x", "-", "info"))
-        probe = _fastest_ours(cfg, evaluate, requirement, T, (PROBE,), details)
-        for method, v in probe.items():
-            rows.append(Row("11", f"  not registered, for <= {requirement:g}: {method}",
-                            f"dt={v['dt']:.4g}: {fmt_time(v['seconds'])} (search run)",
-                            "-", f"{v['seconds'] / t_peer:.2f}x", "-", "info"))
         entry = {"method": best, "dt": dt, "heyoka_tol": tol, "ours_cpu": t_ours,
                  "heyoka_cpu": t_peer, "ratio": ratio, "ours_error": last["ours"],
-                 "heyoka_error": last["heyoka"], "found": found, "not_registered": probe}
+                 "heyoka_error": last["heyoka"], "found": found}
         # The same settings over a longer run: heyoka's error drifts, ours stays bounded.
         long_T = cfg.peer_long_t_end
         traj, sample_ours = run_ours(best, dt, long_T)

@@ -13,6 +13,7 @@ from pendulum_lab.integrators import (
     GAUSS4_TABLEAU,
     GAUSS8_TABLEAU,
     GAUSS12_TABLEAU,
+    GAUSS16_TABLEAU,
     MAIN_METHODS,
     RK4_TABLEAU,
     ButcherTableau,
@@ -22,7 +23,7 @@ from pendulum_lab.simulate import hamiltonian_field
 
 DP = pl.double_pendulum(m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81)
 SP = pl.simple_pendulum(mass=1.0, length=1.0, g=9.81)
-SYMPLECTIC = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8", "glrk12")
+SYMPLECTIC = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8", "glrk12", "glrk16")
 NOT_SYMPLECTIC = ("explicit_euler", "rk4", "semi_implicit_euler_velocity", "leapfrog_velocity")
 
 
@@ -60,6 +61,8 @@ def test_gauss_tableaus_are_collocation_of_order_2s():
     assert GAUSS8_TABLEAU.order == 8 and GAUSS8_TABLEAU.stages == 4
     assert collocation_conditions(GAUSS12_TABLEAU, 6) < 1e-14
     assert GAUSS12_TABLEAU.order == 12 and GAUSS12_TABLEAU.stages == 6
+    assert collocation_conditions(GAUSS16_TABLEAU, 8) < 1e-14
+    assert GAUSS16_TABLEAU.order == 16 and GAUSS16_TABLEAU.stages == 8
     # negative control: RK4 is order 4 but not a 4-stage collocation method
     assert collocation_conditions(RK4_TABLEAU, 4) > 1e-3
 
@@ -74,7 +77,7 @@ def test_inconsistent_tableau_is_rejected():
 def test_method_registry_properties():
     expected = {"explicit_euler": (1, False), "semi_implicit_euler": (1, True),
                 "leapfrog": (2, True), "rk4": (4, False), "glrk4": (4, True),
-                "glrk8": (8, True), "glrk12": (12, True)}
+                "glrk8": (8, True), "glrk12": (12, True), "glrk16": (16, True)}
     for name, (order, symplectic) in expected.items():
         method = pl.METHODS[name]
         assert (method.order, method.symplectic) == (order, symplectic)
@@ -139,6 +142,15 @@ def test_observed_order_glrk12(model, theta0, t_end, dts):
     assert result.errors[-1] > 1e-13  # the fit stays above round-off
 
 
+# Order 16: larger steps still (which fixed-point iteration on these swings still solves).
+@pytest.mark.parametrize("model, theta0", [(DP, [0.5, 0.6]), (SP, [2.5])])
+def test_observed_order_glrk16(model, theta0):
+    result = analysis.observed_order(model, theta0, np.zeros(model.n), t_end=8.0,
+                                     dts=(0.5, 0.4, 0.32, 0.25), method="glrk16")
+    assert abs(result.slope - 16) <= 0.5, result
+    assert result.errors[-1] > 1e-12  # the fit stays above round-off
+
+
 def test_velocity_leapfrog_is_only_first_order_on_the_double_pendulum(dp_reference):
     # The report's leapfrog on (theta, omega) evaluates a velocity-dependent
     # acceleration at a half-step Euler velocity: it loses an order.
@@ -173,7 +185,7 @@ def test_velocity_methods_are_symplectic_for_the_simple_pendulum():
 
 
 # ---------------------------------------------------------------- reversibility
-@pytest.mark.parametrize("name", ["leapfrog", "glrk4", "glrk8", "glrk12"])
+@pytest.mark.parametrize("name", ["leapfrog", "glrk4", "glrk8", "glrk12", "glrk16"])
 def test_symmetric_methods_are_reversible(name):
     assert analysis.reversibility_error(DP, Q0, p0=P0, dt=0.05, method=name) <= 1e-12
 
@@ -298,7 +310,8 @@ def test_glrk4_too_large_dt_raises_naming_step_and_time():
 
 
 @pytest.mark.parametrize("name, tableau", [("glrk4", GAUSS4_TABLEAU), ("glrk8", GAUSS8_TABLEAU),
-                                          ("glrk12", GAUSS12_TABLEAU)])
+                                          ("glrk12", GAUSS12_TABLEAU),
+                                          ("glrk16", GAUSS16_TABLEAU)])
 def test_gauss_step_solves_the_collocation_equations(name, tableau):
     """The step equals the one whose stages SciPy solves independently.
 
@@ -354,7 +367,8 @@ def test_compensated_summation_keeps_what_rounding_loses():
     assert abs(compensated + compensation[0] - (1.0 + 1e-11)) < 1e-16
 
 
-@pytest.mark.parametrize("name, saved", [("glrk4", 0.9), ("glrk8", 0.7), ("glrk12", 0.5)])
+@pytest.mark.parametrize("name, saved", [("glrk4", 0.9), ("glrk8", 0.7), ("glrk12", 0.5),
+                                         ("glrk16", 0.5)])
 def test_starting_values_save_sweeps_and_change_nothing_but_roundoff(name, saved):
     """A run starts each step from the last one's collocation polynomial; ``pl.step`` from f(y).
 

@@ -12,7 +12,7 @@ from pendulum_lab import analysis, plotting, report, source, tables
 
 T_END, DT = 2.0, 0.01
 METHODS = tuple(pl.METHODS)
-SYMPLECTIC_IN_P = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8", "glrk12")
+SYMPLECTIC_IN_P = ("semi_implicit_euler", "leapfrog", "glrk4", "glrk8", "glrk12", "glrk16")
 
 
 def parse_table(text):

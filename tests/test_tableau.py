@@ -109,7 +109,7 @@ def test_bad_tableaus_and_arguments_are_rejected():
         gauss_legendre_tableau(0)
 
 
-@pytest.mark.parametrize("name", ["explicit_euler", "rk4", "glrk4", "glrk8", "glrk12"])
+@pytest.mark.parametrize("name", ["explicit_euler", "rk4", "glrk4", "glrk8", "glrk12", "glrk16"])
 def test_registry_entries_are_derived_from_their_tableaus(name):
     method = METHODS[name]
     tableau = method.tableau
@@ -148,7 +148,7 @@ def test_evaluation_counts_come_from_the_stages():
     for name in ("explicit_euler", "rk4"):
         run = pl.simulate(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, dt=0.01, method=name)
         assert run.evaluations == 100 * METHODS[name].tableau.stages
-    for name in ("glrk4", "glrk8", "glrk12"):
+    for name in ("glrk4", "glrk8", "glrk12", "glrk16"):
         run = pl.simulate(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, dt=0.01, method=name)
         sweeps = run.mean_iterations * 100
         # the first step evaluates its guess f(y); every later step starts from

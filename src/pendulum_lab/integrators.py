@@ -972,6 +972,11 @@ _REGISTRY = [
     # Six stages, order 12: for tight tolerances over long runs.
     Method.from_tableau("glrk12", gauss_legendre_tableau(6),
                         "six-stage Gauss-Legendre collocation (order 12, implicit)"),
+    # Eight stages, order 16: they fill one pass of the vectorized stage kernel
+    # (LANE_GROUP columns, where glrk12's six leave two for padding), so a sweep
+    # costs about what glrk12's does and the steps are longer.
+    Method.from_tableau("glrk16", gauss_legendre_tableau(8),
+                        "eight-stage Gauss-Legendre collocation (order 16, implicit)"),
     Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
            "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
            semi_implicit_euler_velocity_step),
@@ -1014,6 +1019,7 @@ RK4_TABLEAU = METHODS["rk4"].tableau
 GAUSS4_TABLEAU = METHODS["glrk4"].tableau
 GAUSS8_TABLEAU = METHODS["glrk8"].tableau
 GAUSS12_TABLEAU = METHODS["glrk12"].tableau
+GAUSS16_TABLEAU = METHODS["glrk16"].tableau
 
 MAIN_METHODS = ("explicit_euler", "semi_implicit_euler", "leapfrog", "rk4", "glrk4")
 
