@@ -173,3 +173,17 @@ def test_a_new_tableau_method_is_one_line():
     heun = Method.from_tableau("heun3", HEUN3, "Heun's third-order method")
     result = analysis.observed_order(sp, [1.2], [0.0], t_end=1.0, dts=dts, method=heun)
     assert abs(result.slope - 3) <= 0.15, result
+
+
+def test_an_implicit_tableau_with_more_stages_than_the_stack_buffer_is_refused():
+    # the stage sums run in a stack buffer of MAX_STAGE_LANES columns
+    from pendulum_lab.integrators import MAX_STAGE_LANES
+
+    def averaging(stages):  # implicit, every stage the mean of all: consistent, order 1
+        return ButcherTableau(a=np.full((stages, stages), 1.0 / stages),
+                              b=np.full(stages, 1.0 / stages))
+
+    with pytest.raises(ValueError, match=f"at most {MAX_STAGE_LANES}"):
+        Method.from_tableau("too_many", averaging(MAX_STAGE_LANES + 1), "too many stages")
+    # negative control: the largest allowed number is taken
+    assert Method.from_tableau("as_many", averaging(MAX_STAGE_LANES), "as many").implicit
