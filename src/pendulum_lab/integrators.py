@@ -503,7 +503,10 @@ def implicit_rk(hamilton, stage_field, t, q, p, h, params, a_columns, b, c_lanes
     (:mod:`pendulum_lab.codegen`). ``c_lanes`` is ``c`` padded with zeros to
     the number of columns (:func:`stage_lanes`) and ``a_columns`` is ``a``
     transposed and padded with zero columns (``a_columns[j, i] = a_ij``), so
-    that the columns beyond the stages hold the step's start.
+    that the columns beyond the stages hold the step's start. ``lanes``, the
+    number of columns, is passed as the step's constant so that the loops
+    over the columns have a length known to the compiler (read from an
+    array's size, it is not, and those loops were slower than scalar code).
 
     A slope's round-off is not set by its own size: it enters the stage
     states as ``y + h sum_j a_ij K_j``, rounded to the state's last place, so
