@@ -491,7 +491,7 @@ def _combine_row(memory, row, columns, stages, lanes, out):
 
 @kernel_function
 def implicit_rk(hamilton, stage_field, t, q, p, h, params, a_columns, b, c_lanes,
-                extrapolation_columns, lanes, memory):
+                extrapolation_columns, memory):
     """One step of the implicit Runge-Kutta method ``(a, b, c)``.
 
     The stage slopes solve ``K_i = f(t + c_i h, y + h sum_j a_ij K_j)``; they
@@ -503,10 +503,7 @@ def implicit_rk(hamilton, stage_field, t, q, p, h, params, a_columns, b, c_lanes
     (:mod:`pendulum_lab.codegen`). ``c_lanes`` is ``c`` padded with zeros to
     the number of columns (:func:`stage_lanes`) and ``a_columns`` is ``a``
     transposed and padded with zero columns (``a_columns[j, i] = a_ij``), so
-    that the columns beyond the stages hold the step's start. ``lanes``, the
-    number of columns, is passed as the step's constant so that the loops
-    over the columns have a length known to the compiler (read from an
-    array's size, it is not, and those loops were slower than scalar code).
+    that the columns beyond the stages hold the step's start.
 
     A slope's round-off is not set by its own size: it enters the stage
     states as ``y + h sum_j a_ij K_j``, rounded to the state's last place, so
@@ -530,7 +527,7 @@ def implicit_rk(hamilton, stage_field, t, q, p, h, params, a_columns, b, c_lanes
     floats. Returns ``(q1, p1, sweeps, calls)`` (``q1, p1`` views into
     ``memory``), with ``sweeps = -1`` if the iteration did not converge.
     """
-    stages, n = b.size, q.size
+    stages, n, lanes = b.size, q.size, c_lanes.size
     size = 2 * n * lanes  # one iterate of the slopes, in floats
     # Float r lanes + i of an iterate is row r (dq of coordinate r, then dp of
     # coordinate r - n) of stage i; the stage states have the same layout.
@@ -648,7 +645,7 @@ def tableau_step(tableau: ButcherTableau, name: str) -> Step:
             ``acceleration`` (:func:`step_kernels`).
             """
             return implicit_rk(hamilton, stage_field, t, q, p, h, params, a_columns, b, c_lanes,
-                               extrapolation_columns, lanes, memory)
+                               extrapolation_columns, memory)
 
         step, size = implicit_tableau_step, functools.partial(implicit_rk_memory, stages)
     step.__name__ = step.__qualname__ = f"{name}_step"
