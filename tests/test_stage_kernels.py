@@ -277,6 +277,29 @@ def test_the_stopping_rule_takes_maxima_over_bits_that_order_as_the_numbers():
     assert not np.array_equal(np.argsort(bits, kind="stable"), np.argsort(-xs, kind="stable"))
 
 
+def _definition(function):
+    """The ``define`` line of ``function``'s LLVM IR, with its attribute group spelled out."""
+    ir = function.inspect_llvm(function.signatures[0])
+    name = function.__name__
+    line = next(x for x in ir.splitlines() if x.startswith("define") and name in x
+                and "cpython" not in x and "cfunc" not in x)
+    group = line.rsplit("#", 1)[1].split()[0] if "#" in line else None
+    groups = [x for x in ir.splitlines() if group and x.startswith(f"attributes #{group} ")]
+    return line + " ".join(groups)
+
+
+def test_the_stopping_rule_is_inlined_into_the_steps():
+    from pendulum_lab.integrators import _compensated_sum, fixed_point_status
+
+    x = np.ones(4)
+    fixed_point_status(x, x, np.full(4, np.inf), 0.0)
+    _roundoff_status(x, x, np.full(4, np.inf))
+    _compensated_sum(1.0, 1e-17, np.zeros(1), 0)
+    assert "alwaysinline" in _definition(fixed_point_status)
+    assert "alwaysinline" in _definition(_roundoff_status)
+    assert "alwaysinline" not in _definition(_compensated_sum)  # negative control
+
+
 def test_stopping_rule_takes_a_component_moving_off_zero_as_not_done():
     # a slope that is exactly 0 now and was not before has an infinite relative
     # increment: not done (and no ZeroDivisionError, which a 20-link chain from
