@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import pendulum_lab as pl
-from pendulum_lab import _lane_math, codegen
+from pendulum_lab import _lane_math, _llvm_attributes, codegen
 from pendulum_lab.integrators import (
     EPSILON,
     _bits_float,
@@ -147,20 +147,24 @@ def _assembly(function, *args):
 
 def test_align_stack_makes_a_kernel_realign_its_stack_frame():
     # LLVM gives 64-byte spill slots their alignment only in a realigned frame (see
-    # codegen.align_stack); the stage kernels and the time loops call it
+    # _llvm_attributes.align_stack); the stage kernels and the time loops call it
     def body(x):
         return math.sin(x) + 1.0
 
     def aligned(x):
-        codegen.align_stack()
+        _llvm_attributes.align_stack()
         return math.sin(x) + 1.0
 
     realign = "andq\t$-64, %rsp"
     assert realign in _assembly(numba.njit(aligned), 0.5)
     assert realign not in _assembly(numba.njit(body), 0.5)  # negative control
+
+
+def test_the_vectorized_stages_kernel_aligns_its_stack_and_is_inlined_into_the_loops():
     source = codegen.kernel_source(pl.double_pendulum().chain)
-    assert source.count("align_stack()") == 1
-    assert "def stages" in source.split("align_stack()")[0].rsplit("@numba.njit", 1)[1]
+    stages = source.split("def stages(")[1]
+    for call in ("align_stack()", "inline_into_callers()"):
+        assert source.count(call) == 1 and call in stages  # in stages, not in hamilton
 
 
 @pytest.mark.parametrize("n, looped", [(3, False), (3, True), (6, True)])

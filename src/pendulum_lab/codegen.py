@@ -125,32 +125,6 @@ HAVE_SINCOS = _c_library_has_sincos()
 
 
 @intrinsic
-def align_stack(typingctx):
-    """Align the calling kernel's stack frame to 64 bytes (a no-op where it is called).
-
-    A loop vectorized with 512-bit registers spills some of them to the
-    stack. Unless the function asks for an aligned frame before its registers
-    are allocated, LLVM can only give the spill slots the 16-byte alignment
-    that the calling convention guarantees, and then the speed depends on
-    where the operating system happened to place the stack: the
-    double pendulum's 8-column field took 100 ns in some processes and
-    160-170 ns in others (each 64-byte spill split over two cache lines).
-    Setting the function's ``alignstack`` attribute makes its prologue
-    realign the stack, so that every process gets the fast placement.
-    """
-
-    def codegen(context, builder, sig, args):
-        attributes = builder.function.attributes
-        attributes.alignstack = 64
-        # llvmlite prints ``alignstack`` only beside another attribute; Numba's
-        # functions return errors as values and never unwind
-        attributes.add("nounwind")
-        return context.get_dummy_value()
-
-    return types.none(), codegen
-
-
-@intrinsic
 def sincos(typingctx, x):
     """``(sin(x), cos(x))`` for a float ``x``, from one call of the C library's ``sincos``.
 
@@ -318,7 +292,8 @@ import numpy as np
 
 from pendulum_lab._lane_math import LIMIT, lane_cos, lane_sin, lane_sincos
 from pendulum_lab._signatures import ACCELERATION, HAMILTON, STAGES
-from pendulum_lab.codegen import align_stack, sincos, solve_spd
+from pendulum_lab._llvm_attributes import align_stack, inline_into_callers
+from pendulum_lab.codegen import sincos, solve_spd
 
 #: Coordinates of the state (``q`` and ``p`` each have this many).
 COORDINATES = {n}
@@ -410,6 +385,7 @@ def _lane_source(parameters: list[str], unpack: list[str], hamilton: list[str],
 def stages(ts, y, params, dy, work):
     """hamilton at every column of y, {LANE_GROUP} columns per pass (pendulum_lab._lane_math)."""
     align_stack()
+    inline_into_callers()
 {_indent(parameters)}
     if ts.size >= {LANE_GROUP}:
         far = False
@@ -483,7 +459,8 @@ def load_generated(stem: str, source: str, derived_from=(), inject: dict | None 
     """
     here = Path(__file__).parent
     support = b"".join((here / name).read_bytes()
-                       for name in ("codegen.py", "_signatures.py", *derived_from))
+                       for name in ("codegen.py", "_signatures.py", "_llvm_attributes.py",
+                                    *derived_from))
     digest = hashlib.sha256(source.encode() + support).hexdigest()[:16]
     path = cache_dir() / f"{stem}_{digest}.py"
     name = f"pendulum_lab_kernels_{stem}_{digest}"

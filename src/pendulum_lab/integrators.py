@@ -93,6 +93,7 @@ from numba.extending import intrinsic
 
 from . import _validation as check
 from ._lane_math import LANE_GROUP
+from ._llvm_attributes import inline_into_callers
 from .discrete_mechanics import RULES
 from .tableau import ButcherTableau, gauss_legendre_tableau
 
@@ -231,25 +232,6 @@ def jit_step(py_func=None, *, memory=None):
 
 
 # --------------------------------------------------------------------------- implicit solver
-@intrinsic
-def _inline_into_callers(typingctx):
-    """Mark the calling function ``alwaysinline`` for LLVM (a no-op where it is called).
-
-    The stopping rule below runs once per sweep with three arrays, each passed
-    as seven values when it is called; LLVM's cost model kept it a call, which
-    cost about a tenth of a sweep of ``glrk16`` (measured: inlined, 1.47
-    against 1.63 us per step). Numba's own inlining is not an option for
-    :func:`_roundoff_status`, whose division rules (``error_model``) differ
-    from its callers'; LLVM inlines the compiled function, rules included.
-    """
-
-    def codegen(context, builder, sig, args):
-        builder.function.attributes.add("alwaysinline")
-        return context.get_dummy_value()
-
-    return types.none(), codegen
-
-
 MAX_SWEEPS = 100
 # A stalled iteration counts as converged only if its last increment is this
 # small relative to the unknowns (or to the floor the caller gives, see
@@ -281,7 +263,7 @@ def fixed_point_status(new, old, smallest, floor=0.0):
     # test runs only on the last few sweeps. The loops are written without
     # branches (`&`, `|`, conditional expressions): this rule runs once per
     # sweep and, with data-dependent branches, cost as much as a stage.
-    _inline_into_callers()
+    inline_into_callers()
     small, finite = True, True
     for i in range(new.size):
         x = new[i]
@@ -329,7 +311,7 @@ def _roundoff_status(new, old, smallest):
     # negative, so their bits order as they do, and LLVM vectorizes an
     # integer maximum but not a floating-point one, whose NaN rules forbid
     # reordering it (3 times as fast on 32 components, measured).
-    _inline_into_callers()
+    inline_into_callers()
     rate_bits, worst_bits = 0, 0
     measured, first = False, False
     for i in range(new.size):

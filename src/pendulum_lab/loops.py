@@ -167,7 +167,7 @@ The step ({step}, digest {digest}) is set by pendulum_lab.loops before this runs
 """
 import numba
 
-from pendulum_lab.codegen import align_stack
+from pendulum_lab._llvm_attributes import align_stack
 from pendulum_lab.loops import time_loop
 from {first_module} import {first_name} as first_kernel
 from {second_module} import {second_name} as second_kernel
