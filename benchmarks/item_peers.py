@@ -59,7 +59,7 @@ def _fastest_ours(cfg, evaluate, requirement, t_end, methods, details):
     """Per method the largest passing dt (pilot + search); the cheapest method wins."""
     found = {}
     for method in methods:
-        order = pl.get_method(method).order
+        order = pl.METHODS[method].order
         pilot_dt = cfg.peer_pilot_dt
         err, _ = evaluate(method, pilot_dt, cfg.long_pilot_t_end)
         guess = pilot_dt * (requirement / max(err, 1e-300)) ** (1 / order) * 0.9
@@ -70,7 +70,7 @@ def _fastest_ours(cfg, evaluate, requirement, t_end, methods, details):
             + "; ".join(f"{x:.4g}: {e:.3g}, {extra['seconds']:.3f}" for x, e, extra in trials)
         )
         if best is not None:
-            found[str(method)] = {"dt": best[0], "error": best[1], "seconds": best[2]["seconds"]}
+            found[method] = {"dt": best[0], "error": best[1], "seconds": best[2]["seconds"]}
     return found
 
 
