@@ -45,11 +45,16 @@ def _largest_passing(
     Model-guided bracketing, then geometric bisection until the passing and
     the next failing ``x`` are within the factor ``precision``. Returns
     ``(best trial or None, all trials)``; a trial is ``(x, error, extra)``.
+    A step so long that an implicit method's iteration does not converge
+    fails with error ``inf`` (and ``nan`` seconds); the next try halves it.
     """
     trials, x = [], x0
     best = None
     for _ in range(max_trials):
-        err, extra = evaluate(x)
+        try:
+            err, extra = evaluate(x)
+        except pl.ConvergenceError:
+            err, extra = math.inf, {"seconds": math.nan}
         trials.append((x, err, extra))
         passing = [t for t in trials if t[1] <= tol]
         best = max(passing, key=lambda t: t[0]) if passing else None
@@ -60,7 +65,7 @@ def _largest_passing(
                 break
             x = math.sqrt(best[0] * above[0])
         elif above:
-            factor = (tol / above[1]) ** (1 / exponent) * safety if above[1] > 0 else 0.5
+            factor = (tol / above[1]) ** (1 / exponent) * safety if 0 < above[1] < math.inf else 0.5
             x = above[0] * min(max(factor, 0.05), 0.95)
         else:
             factor = (tol / best[1]) ** (1 / exponent) / safety if best[1] > 0 else max_factor

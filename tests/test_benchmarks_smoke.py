@@ -12,7 +12,10 @@ import math
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+import pendulum_lab as pl
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 RESULTS = {"PASS", "info", "not available"}
@@ -94,10 +97,6 @@ def test_a_failing_item_becomes_an_error_row(suite, monkeypatch):
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler")
 def test_c_loop_does_the_same_arithmetic_as_simulate(suite, tmp_path):
-    import numpy as np
-
-    import pendulum_lab as pl
-
     dp = pl.double_pendulum()
     loop = suite.c_yardstick.build(dp, tmp_path)
     theta0, omega0 = np.array([2.0, 2.5]), np.zeros(2)
@@ -113,10 +112,6 @@ def test_c_loop_does_the_same_arithmetic_as_simulate(suite, tmp_path):
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler")
 def test_c_loop_of_the_driven_pendulum_does_the_same_arithmetic(suite, tmp_path):
-    import numpy as np
-
-    import pendulum_lab as pl
-
     model = pl.driven_pendulum()  # forced: the drive depends on the time of each stage
     loop = suite.c_yardstick.build(model, tmp_path)
     theta0 = np.array([[0.2], [1.0]])
@@ -144,6 +139,23 @@ def test_search_finds_the_largest_passing_value(long_run):
     # Negative control: an error that never meets the tolerance gives no answer.
     best, _ = long_run._largest_passing(lambda x: (1.0, {}), 0.02, 4, 1e-8, 1.05, max_trials=5)
     assert best is None
+
+
+def test_search_takes_a_step_without_convergence_as_too_long(long_run):
+    def error(x):
+        if x > 0.05:  # like an implicit step whose iteration diverges
+            raise pl.ConvergenceError(f"did not converge at dt = {x}")
+        return x**4, {"seconds": 1 / x}
+
+    best, trials = long_run._largest_passing(error, 0.4, 4, 1e-8, precision=1.05, max_trials=12)
+    assert 0.01 / 1.05 < best[0] <= 0.01 * (1 + 1e-12)
+    diverged = [t for t in trials if t[0] > 0.05]
+    assert diverged and all(t[1] == math.inf for t in diverged)
+    # Each diverging try is halved, not cut by the error model (which would give 0.05x).
+    assert [t[0] for t in trials[:3]] == pytest.approx([0.4, 0.2, 0.1], rel=1e-12)
+    # Negative control: other errors are not taken for a step that is too long.
+    with pytest.raises(ZeroDivisionError):
+        long_run._largest_passing(lambda x: (1 / 0, {}), 0.02, 4, 1e-8, 1.05, max_trials=3)
 
 
 def test_verdict_direction(suite):

@@ -120,8 +120,16 @@ def test_the_demo_runs_cleanly(lab, page):
 
 def test_play_advances_frames_at_the_playback_speed(page):
     press(page, SIM, "Home")  # paused at t = 0, far from the end of the 60 s run
+    frames_at_home = int(data(page, SIM)["frames"])
     press(page, SIM, "Space")
     wait_data(page, SIM, "playing", "v === '1'")
+    # The first frame after play only takes the display's clock (it has no previous frame to
+    # measure from); until a later frame has moved the time, `clock` may be a paused frame's.
+    page.wait_for_function(
+        "([s, n]) => { const d = document.querySelector(s).dataset;"
+        " return Number(d.frames) > n && Number(d.time) > 0; }",
+        arg=[SIM, frames_at_home],
+    )
     first = data(page, SIM)
     page.wait_for_timeout(1500)
     second = data(page, SIM)
