@@ -22,6 +22,7 @@ from .. import plotting
 from ..analysis import equilibrium_angles, find_equilibrium, rest_state_at_energy
 from ..model import PendulumModel
 from ..simulate import simulate
+from .background import BackgroundCache
 from .controls import (
     DESCRIPTION_WIDTH,
     SLIDER_WIDTH,
@@ -48,7 +49,13 @@ __all__ = [
     "panel_grid",
     "remove_data",
     "resolve_panels",
+    "round_limits",
 ]
+
+#: The explorers round a linear axis's autoscaled limits outward to this fraction of its tick
+#: spacing, and a log axis's to this many decades (:func:`round_limits`).
+LIMIT_GRID = 0.2
+LOG_LIMIT_GRID = 0.25
 
 
 def panel_grid(count: int) -> tuple[int, int]:
@@ -72,6 +79,9 @@ class Explorer(Instrument):
         )
         self._rows, self._cols = panel_grid(len(self.panels))
         super().__init__(model, controls, columns, rows=self._rows)
+        #: The pixels of the panels' frames, reused while they hold still (its ``hits`` and
+        #: ``misses`` count the updates that reused them and those that drew them anew).
+        self.background = BackgroundCache(self.figure, self._canvas)
 
     def compute(self):
         return simulate_controls(self.model.n, self.controls)
@@ -81,6 +91,7 @@ class Explorer(Instrument):
         # the axes and replace only what the panels draw (half the latency).
         axes = self.figure.axes
         if len(axes) != len(self.panels):
+            self.background.clear()
             super().redraw()
             return
         for ax in axes:
@@ -88,12 +99,17 @@ class Explorer(Instrument):
         for ax, (_, panel) in zip(axes, self.panels):
             panel(ax, self.trajectory, self.model)
             cheap_to_redraw(ax)
+            round_limits(ax)
+
+    def rasterise(self) -> None:
+        self.background.render()
 
     def draw(self, figure):
         for k, (_, panel) in enumerate(self.panels):
             ax = figure.add_subplot(self._rows, self._cols, k + 1)
             panel(ax, self.trajectory, self.model)
             cheap_to_redraw(ax)
+            round_limits(ax)
         figure.subplots_adjust(
             left=0.07,
             right=0.985,
@@ -117,6 +133,43 @@ def cheap_to_redraw(ax) -> None:
         if axis.get_scale() == "linear":
             axis.set_major_locator(MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]))
     ax.set_title(ax.get_title(), y=1.0)
+
+
+def round_limits(ax) -> None:
+    """Round the limits of each autoscaled axis of ``ax`` outward to a grid of :data:`LIMIT_GRID`.
+
+    The grid is a fifth of the tick spacing on a linear axis and a quarter of
+    a decade on a log axis, so the frame moves only when the data cross a
+    grid line, not on every small change of a slider: the frame holds still,
+    which makes the change easier to see and lets the explorer reuse the
+    frame's pixels. The limits depend only on the data, so an updated
+    explorer and a fresh one draw the same picture.
+    """
+    for axis, autoscales, get, set_limits in (
+        (ax.xaxis, ax.get_autoscalex_on(), ax.get_xlim, ax.set_xlim),
+        (ax.yaxis, ax.get_autoscaley_on(), ax.get_ylim, ax.set_ylim),
+    ):
+        low, high = get()
+        if not autoscales or not (math.isfinite(low) and math.isfinite(high)) or low == high:
+            continue
+        flipped = low > high
+        low, high = sorted((low, high))
+        if axis.get_scale() == "log":
+            if low <= 0:
+                continue
+            grid = LOG_LIMIT_GRID
+            low, high = math.log10(low), math.log10(high)
+        elif axis.get_scale() == "linear":
+            ticks = axis.get_major_locator().tick_values(low, high)
+            if len(ticks) < 2:
+                continue
+            grid = float(ticks[1] - ticks[0]) * LIMIT_GRID
+        else:
+            continue
+        low, high = math.floor(low / grid) * grid, math.ceil(high / grid) * grid
+        if axis.get_scale() == "log":
+            low, high = 10.0**low, 10.0**high
+        set_limits((high, low) if flipped else (low, high))
 
 
 def remove_data(ax) -> None:
@@ -198,6 +251,9 @@ def explore(
         ``"l1"``, ..., ``"g"``, ``"dt"``, ``"t_end"``, ``"method"``; for one
         link ``"theta"``, ``"omega"``, ``"mass"``, ``"length"``),
         ``trajectory``, ``figure``, ``message``, ``model`` and ``update()``.
+        An update redraws only the data of a panel whose axes, ticks and
+        labels are unchanged (``background`` counts them); to that end each
+        autoscaled axis's limits are rounded out a little (:func:`round_limits`).
 
     Examples
     --------

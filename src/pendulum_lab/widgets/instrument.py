@@ -167,8 +167,12 @@ class Instrument(WidgetWithPicture):
         # FreeType's hinting of every glyph is a fifth of a redraw; unhinted
         # text looks the same at this size and resolution.
         with mpl.rc_context({"text.hinting": "none"}):
-            self._canvas.draw()
+            self.rasterise()
         self._image.value = png_bytes(np.asarray(self._canvas.buffer_rgba()))
+
+    def rasterise(self) -> None:
+        """Draw the figure into its canvas's pixels (the explorer reuses its frames' pixels)."""
+        self._canvas.draw()
 
     # ---- the shared machinery ----------------------------------------------------------------
     @property
