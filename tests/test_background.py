@@ -129,6 +129,18 @@ def test_changed_box_is_the_smallest_rectangle_of_changes():
     assert background._changed_box(blank, blank) == (slice(0, 0), slice(0, 0))
 
 
+def test_a_frame_owns_its_whole_axes_rectangle():
+    # The axes patch paints its rectangle white over a white figure: no pixel changes there,
+    # yet a full draw would cover whatever lay below it, so the frame's box includes it.
+    figure = Figure(figsize=(4, 3), dpi=50)
+    ax = figure.add_axes([0.25, 0.25, 0.5, 0.5])
+    shape = (150, 200, 4)
+    rows, columns = background._frame_box(ax, (slice(0, 0), slice(0, 0)), shape)
+    assert (rows, columns) == (slice(37, 113), slice(50, 150))
+    rows, columns = background._frame_box(ax, (slice(10, 40), slice(5, 60)), shape)
+    assert (rows, columns) == (slice(10, 113), slice(5, 150))
+
+
 def test_round_limits_lands_on_the_grid_and_holds_through_small_changes():
     figure = Figure()
     ax = figure.add_subplot()

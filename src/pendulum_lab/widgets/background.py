@@ -14,6 +14,7 @@ artists, a layout engine), the figure is drawn in full.
 
 from __future__ import annotations
 
+import math
 from operator import attrgetter
 
 import numpy as np
@@ -127,6 +128,20 @@ def _changed_box(pixels: np.ndarray, blank: np.ndarray) -> tuple[slice, slice]:
     return slice(rows[0], rows[-1] + 1), slice(columns[0], columns[-1] + 1)
 
 
+def _frame_box(ax: Axes, changed: tuple[slice, slice], shape) -> tuple[slice, slice]:
+    """``changed`` widened to the whole rectangle of ``ax``, which its patch paints even where
+    that leaves the blank's colour (rows count from the top, display coordinates from the
+    bottom); ``shape`` is the picture's."""
+    height, width = shape[:2]
+    rows, columns = changed
+    top, bottom = height - math.ceil(ax.bbox.y1), height - math.floor(ax.bbox.y0)
+    left, right = math.floor(ax.bbox.x0), math.ceil(ax.bbox.x1)
+    if rows.stop > rows.start:
+        top, bottom = min(top, rows.start), max(bottom, rows.stop)
+        left, right = min(left, columns.start), max(right, columns.stop)
+    return slice(max(top, 0), min(bottom, height)), slice(max(left, 0), min(right, width))
+
+
 def _disjoint(boxes: list[tuple[slice, slice]]) -> bool:
     def meet(a: slice, b: slice) -> bool:
         return a.start < b.stop and b.start < a.stop
@@ -217,5 +232,5 @@ class BackgroundCache:
         finally:
             for artist in shown:
                 artist.set_visible(True)
-        rows, columns = _changed_box(scratch, self._blank)
+        rows, columns = _frame_box(ax, _changed_box(scratch, self._blank), scratch.shape)
         return rows, columns, scratch[rows, columns].copy()
