@@ -56,7 +56,7 @@ def test_a_stale_frame_would_be_seen(monkeypatch):
     # frame whose ticks no longer fit the data is reused, and the pixels differ from a full draw.
     ex = widgets.explore(pl.double_pendulum(), method="rk4", t_end=3.0)
     cache = background.BackgroundCache(ex.figure, ex._canvas)
-    monkeypatch.setattr(background, "axes_key", lambda ax: ("the same for every frame",))
+    monkeypatch.setattr(background, "piece_key", lambda ax, artist: ("the same every time",))
     cached, full = cached_and_full(ex.figure, ex._canvas, cache)
     assert np.array_equal(cached, full) and cache.misses == 2
     ex.controls["theta1"].value = 0.3  # a much smaller swing: new limits and ticks
@@ -92,15 +92,42 @@ def test_data_below_the_ticks_and_grid_is_drawn_under_them(monkeypatch):
     ax.axhspan(0.2, 0.8, color="tab:orange", zorder=1)  # below the axis objects (1.5)
     ax.plot([0, 1], [0, 1])
     cache = background.BackgroundCache(figure, canvas)
-    assert ax.xaxis in background.foreground(ax)
+    assert ax.xaxis in background.split(ax)[1]
     cached, full = cached_and_full(figure, canvas, cache)
     assert np.array_equal(cached, full) and cache.full == 0
     # Control: with the axis objects in the frame, the band would cover the grid and ticks.
-    frame_only = [a for a in background.foreground(ax) if a not in (ax.xaxis, ax.yaxis)]
+    frame, front = background.split(ax)
+    moved = ([*frame[:1], ax.xaxis, ax.yaxis, *frame[1:]],
+             [a for a in front if a not in (ax.xaxis, ax.yaxis)])
     cache = background.BackgroundCache(figure, canvas)
-    monkeypatch.setattr(background, "foreground", lambda axes: frame_only)
+    monkeypatch.setattr(background, "split", lambda axes: moved)
     cached, full = cached_and_full(figure, canvas, cache)
     assert not np.array_equal(cached, full)
+
+
+def test_only_the_pieces_from_the_first_change_on_are_drawn_again():
+    figure = Figure(figsize=(6, 3), dpi=50)
+    canvas = FigureCanvasAgg(figure)
+    ax = figure.add_subplot()
+    ax.set_title("a title")
+    (line,) = ax.plot([0, 1], [0, 1])
+    cache = background.BackgroundCache(figure, canvas)
+    frame, _ = background.split(ax)
+    assert frame[:3] == [ax.patch, ax.xaxis, ax.yaxis] and len(frame) == 6  # and 3 titles
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 6
+    line.set_ydata([0, 3])  # new y limits and ticks; x unchanged
+    ax.relim()
+    ax.autoscale_view()
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 6 + 4  # y axis and titles
+    line.set_xdata([0, 2])  # now x as well: from the x axis on
+    ax.relim()
+    ax.autoscale_view()
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 10 + 5
+    cached, full = cached_and_full(figure, canvas, cache)  # nothing changed
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 15 and cache.hits == 1
 
 
 def test_frames_that_touch_are_drawn_in_full():

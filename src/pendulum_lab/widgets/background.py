@@ -2,14 +2,16 @@
 
 Most of an explorer's redraw is text: tick labels, axis labels, titles. While
 a slider moves, the frame around a panel's data (its axes, ticks and labels)
-often stays as it was. :class:`BackgroundCache` draws each axes' frame alone
-over the empty figure, keeps the rectangle of pixels it changed, and draws it
-again only when its :func:`axes_key` changes; a render pastes the frames into
-the empty figure and paints every panel's data over them in the order a full
-draw would. While the frames' rectangles do not touch, the picture is the
-same pixel for pixel as a full draw (the tests compare them); when they do,
-or for a figure this scheme does not cover (overlapping axes, figure-level
-artists, a layout engine), the figure is drawn in full.
+often stays as it was, or only one of its axes changes. :class:`BackgroundCache`
+draws each axes' frame alone over the empty figure, piece by piece (patch,
+x axis, y axis, titles), keeping the picture after each piece, and draws a
+piece again only when its :func:`piece_key` changes, over the picture of the
+pieces before it. A render pastes the frames into the empty figure and paints
+every panel's data over them in the order of a full draw. While the frames'
+rectangles do not touch, the picture is the same pixel for pixel as a full
+draw (the tests compare them); when they do, or for a figure this scheme
+does not cover (overlapping axes, figure-level artists, a layout engine),
+the figure is drawn in full.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
 from matplotlib.figure import Figure
 
-__all__ = ["BackgroundCache", "axes_key", "data_artists", "foreground"]
+__all__ = ["BackgroundCache", "data_artists", "draw_order", "piece_key", "split"]
 
 
 def data_artists(ax: Axes) -> list:
@@ -33,22 +35,46 @@ def data_artists(ax: Axes) -> list:
     return artists
 
 
-def foreground(ax: Axes) -> list:
-    """The artists of ``ax`` drawn over its cached frame, in the order a full draw uses.
+def draw_order(ax: Axes) -> list:
+    """The artists :meth:`Axes.draw` draws for ``ax``, in its order.
 
-    The data and every child of the axes at or above the data's lowest
-    z-order: the spines, for instance, are drawn over the lines, and the
-    axis objects (ticks, grid and tick labels) over data drawn below them.
-    The axes patch and the titles (outside the data's clip box) are always
-    in the frame; by default the axis objects are too, below the data.
+    The patch first (if the axes and its frame are on), then the children by
+    z-order (a stable sort); no spines without the frame, no axis objects
+    with the axes off, no animated artists.
     """
+    framed = ax.axison and ax.get_frame_on()
+    skipped = {ax.patch}
+    if not framed:
+        skipped.update(ax.spines.values())
+    if not ax.axison:
+        skipped.update((ax.xaxis, ax.yaxis))
+    artists = [a for a in ax.get_children() if a not in skipped and not a.get_animated()]
+    artists.sort(key=attrgetter("zorder"))
+    return [ax.patch, *artists] if framed else artists
+
+
+def split(ax: Axes) -> tuple[list, list]:
+    """``(frame, foreground)``: the artists of ``ax`` cached as pixels and those drawn each time.
+
+    The foreground is the data and everything :func:`draw_order` draws at or
+    above the data's lowest z-order: the spines, for instance, are drawn
+    over the lines, and the axis objects (ticks, grid and tick labels) over
+    data drawn below them. The frame is the rest (by default the patch and
+    the axis objects); the patch (drawn first whatever its z-order) and the
+    titles (outside the data's clip box) are always in it.
+    Both lists keep :func:`draw_order`'s order; both are empty for a hidden axes.
+    """
+    if not ax.get_visible():
+        return [], []
+    order = draw_order(ax)
     data = data_artists(ax)
     if not data:
-        return []
+        return order, []
     lowest = min(artist.get_zorder() for artist in data)
-    frame = {ax.patch, ax.title, ax._left_title, ax._right_title}
-    children = [a for a in ax.get_children() if a not in frame and a.get_zorder() >= lowest]
-    return sorted(children, key=attrgetter("zorder"))  # a stable sort, as Axes.draw's
+    always_frame = {ax.patch, ax.title, ax._left_title, ax._right_title}  # first; outside
+    front = [a for a in order if a.get_zorder() >= lowest and a not in always_frame]
+    shown = set(front)
+    return [a for a in order if a not in shown], front
 
 
 def _text_key(text) -> tuple:
@@ -69,25 +95,25 @@ def _axis_key(axis) -> tuple:
     )
 
 
-def axes_key(ax: Axes) -> tuple:
-    """What the pixels of the frame of ``ax`` depend on, as comparable values.
+def piece_key(ax: Axes, artist) -> tuple:
+    """What the pixels of ``artist``, a piece of the frame of ``ax``, depend on, as values.
 
-    Its position, view limits, facecolor, both axes' scale, tick locations
-    and labels, grid and label, and its titles. A panel that changes anything
-    else about a frame between updates (tick parameters, say) should not be
-    drawn through the cache.
+    The axes' position and, for the patch its colours, for an axis object its
+    view limits, scale, tick locations and labels, grid and label, for a
+    title its text. Any other artist is its own key: a new one (as a panel
+    makes on every update) is drawn anew.
     """
-    ax.apply_aspect()
-    return (
-        tuple(ax.get_position().bounds),
-        tuple(float(v) for v in (*ax.get_xlim(), *ax.get_ylim())),
-        ax.get_facecolor(),
-        ax.axison,
-        ax.get_visible(),
-        _axis_key(ax.xaxis),
-        _axis_key(ax.yaxis),
-        tuple(_text_key(t) for t in (ax.title, ax._left_title, ax._right_title)),
-    )
+    position = tuple(ax.get_position().bounds)
+    if artist is ax.patch:
+        colours = (artist.get_facecolor(), artist.get_edgecolor(), artist.get_linewidth())
+        return ("patch", position, colours)
+    if artist is ax.xaxis:
+        return ("x", position, tuple(map(float, ax.get_xlim())), _axis_key(artist))
+    if artist is ax.yaxis:
+        return ("y", position, tuple(map(float, ax.get_ylim())), _axis_key(artist))
+    if artist in (ax.title, ax._left_title, ax._right_title):
+        return ("title", position, _text_key(artist), tuple(artist.get_position()))
+    return ("artist", artist)
 
 
 def _axes_overlap(figure: Figure) -> bool:
@@ -152,42 +178,56 @@ def _disjoint(boxes: list[tuple[slice, slice]]) -> bool:
 
 
 class BackgroundCache:
-    """Render ``figure`` on ``canvas``, reusing each axes' frame while its :func:`axes_key` holds.
+    """Render ``figure`` on ``canvas``, reusing the pieces of each axes' frame that hold.
 
-    ``hits`` counts the frames reused, ``misses`` those drawn anew (one of
-    each per axes and render), ``full`` the renders drawn in full.
+    A frame is drawn piece by piece (:func:`split`, :func:`piece_key`) over
+    the blank, keeping the picture after each piece; when a piece changes,
+    the picture before it is taken up again and the rest drawn over it, in
+    the order of a full draw. ``hits`` counts the frames reused whole,
+    ``misses`` those with a piece drawn anew (one of the two per axes and
+    render), ``pieces_drawn`` the pieces drawn, ``full`` the renders drawn in
+    full.
     """
 
     def __init__(self, figure: Figure, canvas: FigureCanvasAgg):
         self.figure, self.canvas = figure, canvas
-        self.hits = self.misses = self.full = 0
-        self.clear()
+        self.hits = self.misses = self.pieces_drawn = self.full = 0
+        self._figure_key = self._blank = self._scratch = None  # set up by the first render
+        self._pieces, self._frames = [], []
 
     def clear(self) -> None:
         """Forget every frame (the next render draws them anew)."""
-        self._figure_key = self._blank = self._scratch = None
-        self._keys, self._frames = [], []
+        self._pieces = [[(None, picture) for _, picture in pieces] for pieces in self._pieces]
 
     def render(self) -> None:
         """Draw the figure into the canvas's pixels (call inside any ``rc_context`` needed)."""
         figure = self.figure
         if not _cacheable(figure):
+            self._figure_key = None
             self._draw_in_full()
             return
         if _figure_key(figure) != self._figure_key:
             self._start()
-        layers = [(ax, foreground(ax)) for ax in figure.axes]
-        for k, (ax, artists) in enumerate(layers):
-            key = axes_key(ax)
-            if key == self._keys[k]:
+        layers = []
+        for k, ax in enumerate(figure.axes):
+            # What Axes.draw does before it draws: autoscale, aspect, the titles' place.
+            ax._unstale_viewLim()
+            ax.apply_aspect()
+            ax._update_title_position(self._scratch)
+            frame, front = split(ax)
+            layers.append((ax, front))
+            keys = [piece_key(ax, artist) for artist in frame]
+            cached = self._pieces[k]
+            same = 0
+            while same < min(len(keys), len(cached)) and cached[same][0] == keys[same]:
+                same += 1
+            if same == len(keys) == len(cached):
                 self.hits += 1
             else:
-                self._frames[k] = self._draw_frame(ax, artists)
-                self._keys[k] = key
                 self.misses += 1
+                self._frames[k] = self._draw_frame(k, ax, frame, keys, same)
         if not _disjoint([(rows, columns) for rows, columns, _ in self._frames]):
-            self.full += 1  # frames that touch: a full draw puts one over the other
-            self.canvas.draw()
+            self._draw_in_full()  # frames that touch: a full draw puts one over the other
             return
         pixels = np.asarray(self.canvas.get_renderer().buffer_rgba())
         pixels[...] = self._blank
@@ -198,7 +238,6 @@ class BackgroundCache:
                 ax.draw_artist(artist)
 
     def _draw_in_full(self) -> None:
-        self.clear()
         self.full += 1
         self.canvas.draw()
 
@@ -216,21 +255,25 @@ class BackgroundCache:
         self._blank = np.array(self.canvas.get_renderer().buffer_rgba())
         height, width = self._blank.shape[:2]
         self._scratch = RendererAgg(width, height, figure.dpi)
-        self._keys = [None] * len(figure.axes)
+        self._pieces = [[] for _ in figure.axes]
         self._frames = [None] * len(figure.axes)
         self._figure_key = _figure_key(figure)
 
-    def _draw_frame(self, ax: Axes, artists: list) -> tuple[slice, slice, np.ndarray]:
-        """The frame of ``ax`` drawn alone over the blank: where it differs, and those pixels."""
+    def _draw_frame(self, k: int, ax: Axes, frame: list, keys: list, same: int):
+        """Draw the pieces of the frame of axes ``k`` from ``same`` on over the picture of
+        those before; return where the frame differs from the blank, and its pixels."""
         scratch = np.asarray(self._scratch.buffer_rgba())
-        scratch[...] = self._blank
-        shown = [a for a in artists if a.get_visible()]
-        for artist in shown:
-            artist.set_visible(False)
-        try:
-            ax.draw(self._scratch)
-        finally:
-            for artist in shown:
-                artist.set_visible(True)
-        rows, columns = _frame_box(ax, _changed_box(scratch, self._blank), scratch.shape)
-        return rows, columns, scratch[rows, columns].copy()
+        pieces = self._pieces[k]
+        scratch[...] = pieces[same - 1][1] if same else self._blank
+        for j in range(same, len(frame)):
+            frame[j].draw(self._scratch)
+            self.pieces_drawn += 1
+            if j < len(pieces):  # reuse the picture's memory: fresh pages cost more than a copy
+                np.copyto(pieces[j][1], scratch)
+                pieces[j] = (keys[j], pieces[j][1])
+            else:
+                pieces.append((keys[j], scratch.copy()))
+        del pieces[len(frame) :]
+        picture = pieces[-1][1] if pieces else self._blank
+        rows, columns = _frame_box(ax, _changed_box(picture, self._blank), picture.shape)
+        return rows, columns, picture[rows, columns]
