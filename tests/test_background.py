@@ -74,6 +74,10 @@ def test_figures_it_does_not_cover_are_drawn_in_full():
     cache = background.BackgroundCache(figure, canvas)
     cached, full = cached_and_full(figure, canvas, cache)
     assert np.array_equal(cached, full) and cache.full == 0 and cache.misses == 2
+    ax.set_visible(False)  # covered: a hidden axes has an empty frame
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and cache.full == 0
+    ax.set_visible(True)
     figure.suptitle("a figure-level text is drawn over the axes")
     cached, full = cached_and_full(figure, canvas, cache)
     assert np.array_equal(cached, full) and cache.full == 1

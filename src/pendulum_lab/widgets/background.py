@@ -100,8 +100,9 @@ def piece_key(ax: Axes, artist) -> tuple:
 
     The axes' position and, for the patch its colours, for an axis object its
     view limits, scale, tick locations and labels, grid and label, for a
-    title its text. Any other artist is its own key: a new one (as a panel
-    makes on every update) is drawn anew.
+    title its text. Any other artist gets a key equal to no other (its
+    pixels cannot be told from its properties here), so it and the pieces
+    after it are drawn anew on every render.
     """
     position = tuple(ax.get_position().bounds)
     if artist is ax.patch:
@@ -113,7 +114,7 @@ def piece_key(ax: Axes, artist) -> tuple:
         return ("y", position, tuple(map(float, ax.get_ylim())), _axis_key(artist))
     if artist in (ax.title, ax._left_title, ax._right_title):
         return ("title", position, _text_key(artist), tuple(artist.get_position()))
-    return ("artist", artist)
+    return ("artist", object())
 
 
 def _axes_overlap(figure: Figure) -> bool:
@@ -221,7 +222,7 @@ class BackgroundCache:
             same = 0
             while same < min(len(keys), len(cached)) and cached[same][0] == keys[same]:
                 same += 1
-            if same == len(keys) == len(cached):
+            if same == len(keys) == len(cached) and self._frames[k] is not None:
                 self.hits += 1
             else:
                 self.misses += 1

@@ -79,8 +79,8 @@ class Explorer(Instrument):
         )
         self._rows, self._cols = panel_grid(len(self.panels))
         super().__init__(model, controls, columns, rows=self._rows)
-        #: The pixels of the panels' frames, reused while they hold still (its ``hits`` and
-        #: ``misses`` count the updates that reused them and those that drew them anew).
+        #: The pixels of the panels' frames, reused while they hold still (its ``hits``,
+        #: ``misses`` and ``pieces_drawn`` count what was reused and what drawn anew).
         self.background = BackgroundCache(self.figure, self._canvas)
 
     def compute(self):
@@ -136,14 +136,15 @@ def cheap_to_redraw(ax) -> None:
 
 
 def round_limits(ax) -> None:
-    """Round the limits of each autoscaled axis of ``ax`` outward to a grid of :data:`LIMIT_GRID`.
+    """Round the limits of each autoscaled axis of ``ax`` outward to a coarse grid.
 
     The grid is a fifth of the tick spacing on a linear axis and a quarter of
-    a decade on a log axis, so the frame moves only when the data cross a
-    grid line, not on every small change of a slider: the frame holds still,
-    which makes the change easier to see and lets the explorer reuse the
-    frame's pixels. The limits depend only on the data, so an updated
-    explorer and a fresh one draw the same picture.
+    a decade on a log axis (:data:`LIMIT_GRID`, :data:`LOG_LIMIT_GRID`), so
+    the frame moves only when the data cross a grid line, not on every small
+    change of a slider: the frame holds still, which makes the change easier
+    to see and lets the explorer reuse the frame's pixels. The limits depend
+    only on the data, so an updated explorer and a fresh one draw the same
+    picture.
     """
     for axis, autoscales, get, set_limits in (
         (ax.xaxis, ax.get_autoscalex_on(), ax.get_xlim, ax.set_xlim),
