@@ -214,7 +214,7 @@ def bench_heyoka(cfg: Config) -> Section:
         except pl.ConvergenceError as error:
             # A step that passed over T may still be too long later in the longer run.
             rows.append(Row("11", f"T={long_T:g}, same settings (req. {requirement:g} at T={T:g})",
-                            f"{best}: {error}", "-", "-", "(report)", "info"))
+                            str(error), "-", "-", "(report)", "info"))
             data["requirements"][str(requirement)] = entry
             continue
         energy = np.asarray(traj.energy)
