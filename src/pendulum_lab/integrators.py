@@ -607,6 +607,18 @@ def _compensated_sum(y, increment, compensation, i):
     return total
 
 
+def _lane_columns(matrix: np.ndarray, lanes: int) -> np.ndarray:
+    """``matrix`` (stages x stages) transposed and padded with zero columns to ``lanes``.
+
+    C-ordered, as :func:`_combine_row`'s vectorized loop reads its rows
+    (``np.pad`` of a transpose would give a Fortran-ordered array).
+    """
+    stages = matrix.shape[0]
+    columns = np.zeros((stages, lanes))
+    columns[:, :stages] = matrix.T
+    return columns
+
+
 def tableau_step(tableau: ButcherTableau, name: str) -> Step:
     """The step function of the Runge-Kutta method ``name``, made from its tableau.
 
@@ -634,12 +646,10 @@ def tableau_step(tableau: ButcherTableau, name: str) -> Step:
                              f"most {MAX_STAGE_LANES}")
         c_lanes = np.zeros(lanes)
         c_lanes[:stages] = c
-        a_columns = np.zeros((stages, lanes))
-        a_columns[:, :stages] = a.T
+        a_columns = _lane_columns(a, lanes)
         extrapolation_columns = np.zeros((0, 0))
         if tableau.extrapolation is not None:  # None: coinciding nodes, no polynomial to continue
-            extrapolation_columns = np.zeros((stages, lanes))
-            extrapolation_columns[:, :stages] = tableau.extrapolation.T
+            extrapolation_columns = _lane_columns(tableau.extrapolation, lanes)
 
         def implicit_tableau_step(hamilton, stage_field, t, q, p, h, params, separable,
                                   damping_rate, memory):
