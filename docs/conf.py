@@ -3,7 +3,7 @@
 The site is built with Sphinx, MyST-NB and sphinx-book-theme, fully offline: MathJax is served
 from the local copy that `make docs` unpacks into ``docs/_vendor/`` (from the npm registry), the
 theme ships its fonts and scripts, and no intersphinx inventory is fetched. What is specific to
-this course (launch buttons from one setting, alt text from the cells' ``# alt:`` lines, static
+this course (launch buttons from one setting, alt text from the cells' metadata, static
 pictures instead of live widgets, the course map, re-execution when the package changes) lives
 in ``docs/_ext/course_site.py``.
 """

@@ -5,10 +5,11 @@ What it adds to Sphinx + MyST-NB + sphinx-book-theme (see docs/README.md for the
 * **Launch buttons from one setting.** ``course_repository_url`` (conf.py) fills the theme's
   ``repository_url`` and ``launch_buttons`` and the ``launch`` tag; while it is empty none of
   them is set, so no launch button and no Binder link is rendered.
-* **Alt text from the cell.** A code cell's leading comment lines may carry ``# alt: text``; the
-  text becomes the ``alt`` of the pictures in that cell's outputs (PNG outputs and ``<img>`` in
-  HTML outputs, such as an embedded animation). A picture anywhere on the site left without alt
-  text is a build warning (an error under ``-W``).
+* **Alt text from the cell.** A code cell's metadata may carry
+  ``{"pendulum_lab": {"alt": [...]}}`` (:data:`ANNOTATIONS`); the texts become the ``alt`` of the
+  pictures in that cell's outputs (PNG outputs and ``<img>`` in HTML outputs, such as an embedded
+  animation). A picture anywhere on the site left without alt text is a build warning (an error
+  under ``-W``).
 * **Static pictures instead of live widgets.** An output that is a widget view is shown through
   the ``image/png`` carried in the same output (conf.py's mime priority), followed by a note that
   its controls need a live session. A widget output without such a picture is replaced by that
@@ -46,66 +47,29 @@ PICTURE_TYPES = ("image/png", "image/jpeg", "image/gif", "image/svg+xml")
 NOTEBOOK_FOLDER = "notebooks"
 FINGERPRINT_FILE = ".package-fingerprint"
 
-_ALT_LINE = re.compile(r"#\s*alt\s*:(.*)$", re.IGNORECASE)
-_CONTINUATION = re.compile(r"#\s{2,}(\S.*)$")
 _IMG_TAG = re.compile(r"<img\b[^>]*>", re.IGNORECASE)
 _ALT_VALUE = re.compile(r"""\balt\s*=\s*("([^"]*)"|'([^']*)'|([^\s>"']+))""", re.IGNORECASE)
 
 
 # ------------------------------------------------------------------------------ alt text
-def _alt_lines(source: str) -> list[tuple[int, bool, str]]:
-    """(line number, starts a text, text) of each ``# alt:`` line and its continuation lines."""
-    found: list[tuple[int, bool, str]] = []
-    continuing = False
-    for number, line in enumerate(source.splitlines()):
-        stripped = line.strip()
-        if not stripped:
-            continuing = False
-            continue
-        if not stripped.startswith("#"):
-            break
-        match = _ALT_LINE.match(stripped)
-        more = _CONTINUATION.match(stripped) if continuing else None
-        if match:
-            found.append((number, True, match.group(1).strip()))
-            continuing = True
-        elif more:
-            found.append((number, False, more.group(1).strip()))
-        else:
-            continuing = False
-    return found
+#: The key of a code cell's metadata under which the course keeps what its outputs are:
+#: ``{"expect": ["figure", "widget"], "alt": ["what the first picture shows", ...]}``. The
+#: browser tests read ``expect``, this extension ``alt``; the student sees neither in the code.
+ANNOTATIONS = "pendulum_lab"
 
 
-def alt_texts(source: str) -> list[str]:
-    """The alt texts announced in the leading comment lines of a code cell.
+def alt_texts(metadata: dict) -> list[str]:
+    """The alt texts a code cell's metadata gives its pictures (one for all, or one each).
 
-    ``# alt: text`` starts a text; the comment lines right after it whose text is indented by
-    two or more spaces after the ``#`` continue it. Only the comment block before the first
-    line of code counts (like the ``# expect:`` markers of the browser tests).
-
-    >>> alt_texts("# expect: figure\\n# alt: Energy against time;\\n#   flat.\\nplot()")
-    ['Energy against time; flat.']
-    >>> alt_texts("plot()  # alt: not a leading comment")
-    []
+    >>> alt_texts({"pendulum_lab": {"expect": ["figure"], "alt": ["Energy against time."]}})
+    ['Energy against time.']
+    >>> alt_texts({"pendulum_lab": {"alt": ["  "]}}), alt_texts({})
+    ([], [])
     """
-    texts: list[str] = []
-    for _, starts, text in _alt_lines(source):
-        if starts:
-            texts.append(text)
-        else:
-            texts[-1] = f"{texts[-1]} {text}"
-    return [text for text in texts if text]
-
-
-def without_alt_lines(source: str) -> str:
-    """The cell's source as the page shows it: the ``# alt:`` lines are in the picture's alt
-    text already.
-
-    >>> without_alt_lines("# expect: figure\\n# alt: A curve;\\n#   rising.\\nplot()")
-    '# expect: figure\\nplot()'
-    """
-    drop = {number for number, _, _ in _alt_lines(source)}
-    return "\n".join(line for k, line in enumerate(source.splitlines()) if k not in drop)
+    texts = metadata.get(ANNOTATIONS, {}).get("alt", [])
+    if isinstance(texts, str):
+        texts = [texts]
+    return [text.strip() for text in texts if isinstance(text, str) and text.strip()]
 
 
 def _img_lacks_alt(tag: str) -> bool:
@@ -163,19 +127,10 @@ def _missing_alt(picture: nodes.Element) -> bool:
 
 
 def fill_alt_text(app, doctree: nodes.document) -> None:
-    """Give the pictures in each code cell's outputs the cell's ``# alt:`` texts; warn about
+    """Give the pictures in each code cell's outputs the cell's alt texts; warn about
     every picture on the page still without alt text."""
     for cell in doctree.findall(_is("cell_code")):
-        blocks = list(cell.findall(nodes.literal_block))[:1]
-        texts = alt_texts(blocks[0].astext()) if blocks else []
-        if texts:
-            # The same code block without the alt lines. Its rawsource must be its text, or
-            # Sphinx takes it for a parsed literal and does not highlight it.
-            shown = without_alt_lines(blocks[0].astext())
-            block = blocks[0].copy()
-            block.rawsource = shown
-            block += nodes.Text(shown)
-            blocks[0].replace_self(block)
+        texts = alt_texts(cell.get("cell_metadata") or {})
         outputs = [
             bundle
             for bundle in cell.findall(_is("mime_bundle"))
@@ -185,7 +140,7 @@ def fill_alt_text(app, doctree: nodes.document) -> None:
             continue
         if len(texts) != 1 and len(texts) != len(outputs):
             logger.warning(
-                f"cell {cell.get('cell_index')}: {len(texts)} '# alt:' texts for "
+                f"cell {cell.get('cell_index')}: {len(texts)} alt texts for "
                 f"{len(outputs)} pictures; give one text for all or one per picture",
                 location=cell,
                 type="course",
@@ -203,8 +158,9 @@ def fill_alt_text(app, doctree: nodes.document) -> None:
             )
             where = f"the output of cell {cell.get('cell_index')}" if cell is not None else "page"
             logger.warning(
-                f"a picture in {where} has no alt text: add a '# alt: what it shows' line at "
-                "the top of the cell (notebooks) or alt text to the image (pages)",
+                f"a picture in {where} has no alt text: give the cell the metadata "
+                f'{{"{ANNOTATIONS}": {{"alt": ["what it shows"]}}}} (notebooks) or give the '
+                "image alt text (pages)",
                 location=picture,
                 type="course",
                 subtype="alt",

@@ -27,7 +27,6 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import re
 import shutil
 import signal
 import socket
@@ -73,8 +72,7 @@ LAB_SETTINGS = {
     "@jupyterlab/docmanager-extension/plugin": {"autosave": False},
 }
 
-# Marker convention, see test_jupyterlab.py: leading comment lines "# expect: figure widget".
-_EXPECT_LINE = re.compile(r"#\s*expect\s*:(.*)$", re.IGNORECASE)
+# Marker convention, see test_jupyterlab.py: the cell metadata {"pendulum_lab": {"expect": [...]}}.
 EXPECT_KINDS = ("figure", "widget")
 
 # ---------------------------------------------------------------------------------------------
@@ -127,24 +125,13 @@ def run_all_timeout() -> float:
     return float(os.environ.get("PENDULUM_LAB_BROWSER_TIMEOUT", "240"))
 
 
-def parse_expectations(source: str) -> tuple[set[str], list[str]]:
-    """Return (expected kinds, unknown words) from the leading comment lines of a cell."""
-    kinds: set[str] = set()
-    unknown: list[str] = []
-    for line in source.splitlines():
-        stripped = line.strip()
-        if not stripped:
-            continue
-        if not stripped.startswith("#"):
-            break
-        match = _EXPECT_LINE.match(stripped)
-        if match:
-            for word in re.split(r"[\s,]+", match.group(1).strip().lower()):
-                if word in EXPECT_KINDS:
-                    kinds.add(word)
-                elif word:
-                    unknown.append(word)
-    return kinds, unknown
+def parse_expectations(annotations: dict) -> tuple[set[str], list[str]]:
+    """Return (expected kinds, unknown words) from a cell's ``pendulum_lab`` metadata."""
+    words = annotations.get("expect", []) if isinstance(annotations, dict) else []
+    if isinstance(words, str):
+        words = [words]
+    kinds = {word for word in words if word in EXPECT_KINDS}
+    return kinds, [word for word in words if word not in EXPECT_KINDS]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -360,7 +347,8 @@ window.__plab = {
     if (!p) return null;
     return p.content.widgets.map((cell, index) => {
       const model = cell.model;
-      const info = {index, type: model.type, source: model.sharedModel.getSource()};
+      const info = {index, type: model.type, source: model.sharedModel.getSource(),
+                    annotations: model.getMetadata('pendulum_lab') || {}};
       if (model.type !== 'code') return info;
       const prompt = cell.node.querySelector('.jp-InputArea-prompt');
       info.executionCount = model.executionCount;
@@ -708,15 +696,15 @@ def judge_cells(cells: list[dict]) -> list[str]:
             problems.append(f"{where} shows 'Error displaying widget'")
         if "Loading widget..." in text:
             problems.append(f"{where} still shows 'Loading widget...': the widget never rendered")
-        kinds, unknown = parse_expectations(cell["source"])
+        kinds, unknown = parse_expectations(cell.get("annotations", {}))
         if unknown:
             problems.append(
-                f"{where} has unknown '# expect:' words {unknown}; use {list(EXPECT_KINDS)}"
+                f"{where} has unknown `expect` words {unknown}; use {list(EXPECT_KINDS)}"
             )
         if "figure" in kinds and cell.get("figures", 0) < 1:
-            problems.append(f"{where} is marked '# expect: figure' but shows no visible figure")
+            problems.append(f"{where} expects a figure but shows no visible figure")
         if "widget" in kinds and cell.get("widgets", 0) < 1:
-            problems.append(f"{where} is marked '# expect: widget' but shows no visible widget")
+            problems.append(f"{where} expects a widget but shows no visible widget")
     return problems
 
 

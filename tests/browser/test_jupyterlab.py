@@ -12,16 +12,15 @@ execution count and the kernel is Idle again. Then they check:
 
 Marker convention for notebook authors
 --------------------------------------
-A code cell announces what it must show with a comment among its leading comment lines (before
-the first line of code; other leading comments such as ``# NBVAL_IGNORE_OUTPUT`` may come
-first)::
+A code cell announces what it must show in its metadata, not in its code::
 
-    # expect: figure          at least one visible image, canvas or svg in the cell's output
-    # expect: widget          at least one rendered ipywidgets view in the cell's output
-    # expect: widget figure   both (an explorer: controls plus the figure they redraw)
+    "metadata": {"pendulum_lab": {"expect": ["figure"]}}
+
+``"figure"``: at least one visible image, canvas or svg in the cell's output; ``"widget"``: at
+least one rendered ipywidgets view; both: an explorer (controls plus the figure they redraw).
 
 A figure drawn inside a widget (``interactive_output``) counts for the cell that displays the
-widget. Unknown words after ``expect:`` fail the test, so a typo cannot switch a check off.
+widget. Unknown words in ``expect`` fail the test, so a typo cannot switch a check off.
 
 For the interaction tests, put a control and the figure it redraws in the output of the same
 cell (for instance ``display(VBox([HBox([slider, dropdown]), out]))``), and a ``Play`` widget

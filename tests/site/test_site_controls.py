@@ -32,12 +32,23 @@ class Markdown(str):
     """The source of a Markdown cell (any other string is a code cell)."""
 
 
+class Annotated(str):
+    """The source of a code cell with the course's metadata (``{"alt": [...], ...}``)."""
+
+    def __new__(cls, source: str, **annotations):
+        made = super().__new__(cls, source)
+        made.annotations = annotations
+        return made
+
+
 def notebook(*cells: str) -> str:
     """A notebook (JSON) with these cells, Python 3 kernel, no outputs."""
     made = []
     for source in cells:
         kind = "markdown" if isinstance(source, Markdown) else "code"
-        cell = {"cell_type": kind, "id": f"c{len(made)}", "metadata": {}, "source": source}
+        metadata = {"pendulum_lab": source.annotations} if isinstance(source, Annotated) else {}
+        cell = {"cell_type": kind, "id": f"c{len(made)}", "metadata": metadata,
+                "source": str(source)}
         if kind == "code":
             cell.update(outputs=[], execution_count=None)
         made.append(cell)
@@ -96,23 +107,24 @@ def test_a_cell_that_raises_fails_the_build(tmp_path):
     assert "RuntimeError" in result.log and "boom" in result.log
 
 
-def test_a_figure_without_alt_text_fails_the_build_and_an_alt_line_mends_it(tmp_path):
+def test_a_figure_without_alt_text_fails_the_build_and_alt_metadata_mends_it(tmp_path):
     site = make_site(
         tmp_path, {"index.md": INDEX, "lesson.ipynb": notebook(Markdown("# Lesson"), FIGURE)}
     )
     result = build(site)
     assert not result.ok
     assert "has no alt text" in result.log
-    described = "# expect: figure\n# alt: A straight line falling from 1 to 0.\n" + FIGURE
+    described = Annotated(FIGURE, expect=["figure"], alt=["A straight line falling from 1 to 0."])
     (site / "lesson.ipynb").write_text(notebook(Markdown("# Lesson"), described))
     result = build(site)
     assert result.ok, "\n".join(result.warnings())
     page = (site / "_build" / "html" / "lesson.html").read_text(encoding="utf-8")
     assert 'alt="A straight line falling from 1 to 0."' in page
-    # The cell's code is still shown as highlighted code, without its alt line.
-    code = '<div class="highlight"><pre><span></span><span class="c1"># expect: figure</span>'
+    # The cell's code is shown as highlighted code, as the student sees it: the annotations
+    # stay in the metadata.
+    code = '<div class="highlight"><pre><span></span><span class="kn">import</span>'
     assert code in page
-    assert "# alt:" not in page
+    assert "pendulum_lab" not in page
 
 
 def test_a_widget_without_a_static_picture_fails_the_build(tmp_path):
@@ -351,21 +363,15 @@ def test_a_repository_address_that_is_not_one_is_refused(tmp_path):
 # ---------------------------------------------------------------------------------------------
 # The extension's parsing, without a build
 # ---------------------------------------------------------------------------------------------
-def test_alt_lines_are_read_from_the_leading_comments_only():
-    from course_site import alt_texts, html_without_alt, without_alt_lines
+def test_alt_texts_are_read_from_the_cell_metadata():
+    from course_site import alt_texts, html_without_alt
 
-    source = (
-        "# NBVAL_IGNORE_OUTPUT\n# expect: figure\n# alt: Energy against time;\n"
-        "#   the total is flat.\n# alt: A second picture.\nplot()\n# alt: too late\n"
-    )
-    assert alt_texts(source) == ["Energy against time; the total is flat.", "A second picture."]
-    assert alt_texts("plot()  # alt: not leading") == []
-    assert alt_texts("# alt:   \nplot()") == []  # an empty text is no text
-    # The page shows the code without the alt lines (their text is in the picture's alt).
-    assert (
-        without_alt_lines(source)
-        == "# NBVAL_IGNORE_OUTPUT\n# expect: figure\nplot()\n# alt: too late"
-    )
+    metadata = {"pendulum_lab": {"expect": ["figure"], "alt": ["Energy.", "A second picture."]}}
+    assert alt_texts(metadata) == ["Energy.", "A second picture."]
+    assert alt_texts({"pendulum_lab": {"alt": "One text."}}) == ["One text."]
+    assert alt_texts({"pendulum_lab": {"alt": ["   "]}}) == []  # an empty text is no text
+    assert alt_texts({"pendulum_lab": {"expect": ["figure"]}}) == []
+    assert alt_texts({"tags": ["alt"]}) == []
     assert html_without_alt('<img src="a.png">')
     assert html_without_alt('<img src="a.png" alt="">')
     assert not html_without_alt('<img alt="a curve" src="a.png">')
