@@ -16,10 +16,11 @@ def test_an_unanswered_exercise_says_so_and_checks_nothing(capsys):
 
 def test_a_right_answer_passes_and_a_wrong_one_fails_with_its_hint_only(capsys):
     target = 6.283185307179586
-    right = Exercise("3. A period", target)
-    right.require(abs(right_value := target) - target < 1e-9, "compare with 2 pi sqrt(l / g)")
+    answer = 2 * 3.141592653589793
+    right = Exercise("3. A period", answer)
+    right.require(abs(answer - target) < 1e-9, "compare with 2 pi sqrt(l / g)")
     right.report()
-    assert "correct" in capsys.readouterr().out and right_value == target
+    assert "correct" in capsys.readouterr().out
     wrong = Exercise("3. A period", 6.0)
     wrong.require(abs(6.0 - target) < 1e-9, "the period of small swings is 2 pi sqrt(l / g)")
     wrong.require(6.0 > 0, "a period is positive")  # holds: its hint must not be shown
