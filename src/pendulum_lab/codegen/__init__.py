@@ -22,6 +22,7 @@ from .kernels import (
     solve_spd,
     stage_kernel,
 )
+from .lowlevel import sincos
 
 __all__ = [
     "UNROLLED_MAX_LINKS",
@@ -36,6 +37,7 @@ __all__ = [
     "looped_kernels",
     "paired_trig",
     "parameters_array",
+    "sincos",
     "solve_spd",
     "stage_kernel",
 ]
