@@ -168,3 +168,16 @@ def test_the_stated_error_falls_like_the_fourth_power_of_the_step():
 def test_bad_arguments_are_refused_naming_them(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+def test_branches_are_drawn_solid_where_stable_and_dashed_where_not():
+    values = np.linspace(1.0, 1.03, 4)
+    branch = chaos.continue_orbit(DRIVEN, "drive_amplitude", values, [-1.05], [1.90],
+                                  symmetric=True)
+    fig = pl.plotting.plot_orbit_branches({"symmetric": (values, branch)})
+    left, right = fig.axes
+    solid, dashed = left.lines[0], left.lines[1]
+    assert np.isfinite(solid.get_ydata()).sum() >= 1 and np.isfinite(dashed.get_ydata()).sum() >= 2
+    assert len(right.lines) >= 4  # two pieces and the lines +1 and -1
+    with pytest.raises(ValueError, match="values but"):  # negative control: a mismatched branch
+        pl.plotting.plot_orbit_branches({"symmetric": (values[:2], branch)})
