@@ -66,13 +66,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from .. import _validation as check
-from .._angles import wrap_angle
-from ..family import FAMILY_PARAMETERS
+from .. import validation as check
+from ..driver.simulate import canonical_state, simulate
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..simulate import canonical_state, simulate
-from ._common import require_finite
+from ..model import FAMILY_PARAMETERS, require_model
+from ..model.angles import wrap_angle
+from ..model.pendulum import PendulumModel
+from .common import require_finite
 from .stroboscopic import drive_period
 from .tangent import magnus_propagators, ordered_product
 
@@ -275,7 +275,7 @@ def periodic_orbit(
     >>> orbit.stable, bool(orbit.residual < 1e-10), round(float(abs(orbit.multipliers[0])), 4)
     (True, True, 0.0948)
     """
-    check.pendulum_model(model)
+    require_model(model)
     drive_period(model)
     if model.shape != ():
         raise ValueError("`model` must be one model, not a family: find the orbits of a family's "
@@ -365,7 +365,7 @@ def continue_orbit(
     list of PeriodicOrbit
         One per value.
     """
-    check.pendulum_model(model)
+    require_model(model)
     parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
     values = check.real_sequence("values", values)
     options = dict(periods=periods, t0=t0, steps_per_period=steps_per_period, method=method,
@@ -476,7 +476,7 @@ def locate_bifurcation(
     >>> flip.kind, round(flip.value, 4), round(float(flip.orbit.multipliers[0].real), 6)
     ('period doubling', 1.0664, -1.0)
     """
-    check.pendulum_model(model)
+    require_model(model)
     parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
     if multiplier not in (-1, 1):
         raise ValueError(f"`multiplier` must be -1 (period doubling) or +1 (fold or pitchfork), "
@@ -651,7 +651,7 @@ def period_doubling_cascade(
     >>> cascade.periods.tolist(), cascade.values.round(4).tolist()
     ([1, 2], [1.0664, 1.0793])
     """
-    check.pendulum_model(model)
+    require_model(model)
     parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
     start, stop = _bracket(bracket)
     doublings = check.integer_at_least("doublings", doublings, 1)

@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..events import hermite
-from ..model import PendulumModel
-from ..simulate import Trajectory
+from ..driver.events import hermite
+from ..driver.simulate import Trajectory
+from ..model.pendulum import PendulumModel
 
 __all__ = ["magnus_propagators", "ordered_product"]
 
@@ -56,7 +56,7 @@ def magnus_propagators(model: PendulumModel, traj: Trajectory, dt: float) -> np.
 
     with ``A_1``, ``A_2`` the Jacobians at the two Gauss points
     ``t_k + (1/2 -+ sqrt(3)/6) dt`` (the state there from cubic Hermite
-    interpolation between the saved steps, :func:`pendulum_lab.events.hermite`,
+    interpolation between the saved steps, :func:`pendulum_lab.driver.events.hermite`,
     accurate to ``O(dt^4)``). The exponential is split as
     ``exp(tr W / 2n) exp(W0)``, ``W0 = W - (tr W / 2n) I``: the scalar factor
     exactly, ``exp(W0)`` by its (2,2) Pade approximant
