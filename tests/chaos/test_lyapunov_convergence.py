@@ -32,6 +32,9 @@ def test_the_spectrum_and_the_energy_scan_carry_the_same_measure():
     scan = chaos.lyapunov_by_energy(DP, [16.0], orbits=2, t_end=20.0, method="rk4")
     assert scan.half_run.shape == scan.exponent.shape == (2,)
     assert np.all(scan.half_run_difference >= 0)
+    assert scan.running.shape == (len(scan.t), 2)
+    assert np.array_equal(scan.running[-1], scan.exponent)
+    assert np.array_equal(scan.running[len(scan.t) // 2 - 1], scan.half_run)
 
 
 def test_a_chaotic_estimate_settles_and_a_regular_one_does_not():

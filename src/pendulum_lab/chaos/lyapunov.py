@@ -674,6 +674,9 @@ class EnergyLyapunov:
     half_run : ndarray, shape (K,), optional
         Benettin's estimate after the first half of the run [1/s] (see
         :class:`LyapunovEstimate`); None when not recorded.
+    t : ndarray, shape (J,), optional
+    running : ndarray, shape (J, K), optional
+        The running estimates of every orbit at the times ``t`` [1/s].
     """
 
     energies: np.ndarray
@@ -687,6 +690,8 @@ class EnergyLyapunov:
     method: str
     wall_time: float
     half_run: np.ndarray | None = None
+    t: np.ndarray | None = None
+    running: np.ndarray | None = None
 
     @property
     def half_run_difference(self) -> np.ndarray:
@@ -783,4 +788,5 @@ def lyapunov_by_energy(
                                  seed=seed, progress=progress)
     return EnergyLyapunov(energies, energy, theta0, omega0, np.asarray(estimate.exponent),
                           threshold, float(estimate.t[-1]), estimate.dt, estimate.method,
-                          estimate.wall_time, np.asarray(estimate.half_run))
+                          estimate.wall_time, np.asarray(estimate.half_run), estimate.t,
+                          estimate.running)
