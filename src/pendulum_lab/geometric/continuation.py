@@ -36,10 +36,10 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from .. import _validation as check
-from ..discrete_mechanics import RULES, discrete_lagrangian
-from ..model import PendulumModel
-from ._checks import conservative_model
+from .. import validation as check
+from ..model.pendulum import PendulumModel
+from ..symbolic.discrete_mechanics import RULES, discrete_lagrangian
+from .model_checks import conservative_model
 
 __all__ = ["RootBranch", "variational_root_branch"]
 

@@ -41,12 +41,12 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from .. import _validation as check
-from .._validation import pendulum_model as check_model
+from .. import validation as check
 from ..analysis import finite_difference_jacobian, step_jacobian, symplectic_form_defect
+from ..driver.simulate import simulate, step
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..simulate import simulate, step
+from ..model import require_model
+from ..model.pendulum import PendulumModel
 
 __all__ = [
     "LoopAreas",
@@ -228,7 +228,7 @@ def carried_loop_areas(model: PendulumModel, method, center, axes, *, t_end: flo
     >>> bool(abs(areas.ratio[-1] - 1) < 1e-10)
     True
     """
-    model = check_model(model)
+    model = require_model(model)
     tol = check.positive_number("tol", tol)
     points = check.integer_at_least("min_points", min_points, 8)
     max_points = check.integer_at_least("max_points", max_points, 2 * points)
@@ -280,7 +280,7 @@ def jacobian_properties(model: PendulumModel, method, theta, p, dt: float) -> tu
     >>> round(det, 6)          # 1 + h^2 g / l cos(0)
     1.0981
     """
-    model = check_model(model)
+    model = require_model(model)
     jac = step_jacobian(model, theta, p0=p, dt=dt, method=method)
     return float(np.linalg.det(jac)), symplectic_form_defect(jac)
 
@@ -306,7 +306,7 @@ def jacobian_along_orbit(model: PendulumModel, method, theta0, p0, *, dt: float,
     >>> bool(np.all(np.abs(det - 1) < 1e-8))
     True
     """
-    model = check_model(model)
+    model = require_model(model)
     steps = check.integer_at_least("steps", steps, 1)
     run = simulate(model, theta0, p0=p0, t_end=steps * dt, dt=dt, method=method,
                    progress=False)
@@ -393,7 +393,7 @@ def one_step_area_change(model: PendulumModel, method, theta, p, dt: float, *,
     >>> round(float(change), 12)     # h^2 (g/l) cos(theta)
     0.0981
     """
-    model = check_model(model)
+    model = require_model(model)
     if model.forced:
         raise ValueError("`model` must be unforced: the area change of a damped or driven "
                          "step is notebook 17's subject")
@@ -481,7 +481,7 @@ def velocity_form_defect(model: PendulumModel, method, theta, omega, dt: float, 
     >>> bool(velocity_form_defect(dp, "glrk8", [1.0, 1.5], [0.3, -0.2], 0.05) < 1e-7)
     True
     """
-    model = check_model(model)
+    model = require_model(model)
     theta = check.state_vector("theta", theta, model.n)
     omega = check.state_vector("omega", omega, model.n)
     dt = check.real_number("dt", dt)
