@@ -273,6 +273,17 @@ def test_geometric_figures_draw_their_results_into_given_axes():
         plotting.plot_crossing_times(crossings, ax="left")
 
 
+def test_transport_threshold_figure_draws_its_thresholds():
+    from pendulum_lab.geometric import standard_map
+
+    threshold = standard_map.transport_threshold((10, 100), ks=np.linspace(1.5, 2.5, 5), orbits=4)
+    ax = plotting.plot_transport_threshold(threshold).axes[0]
+    np.testing.assert_array_equal(ax.lines[0].get_xdata(), threshold.iterations)
+    np.testing.assert_array_equal(ax.lines[0].get_ydata(), threshold.thresholds)
+    with pytest.raises(TypeError, match="`ax`"):
+        plotting.plot_transport_threshold(threshold, ax="left")
+
+
 def test_carried_loops_share_limits_and_show_the_area_ratio():
     from pendulum_lab.geometric import phase_space
 

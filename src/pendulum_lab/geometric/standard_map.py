@@ -49,6 +49,7 @@ __all__ = [
     "FLUX_EXPONENT",
     "GREENE_K",
     "CrossingTimes",
+    "TransportThreshold",
     "critical_step",
     "first_crossings",
     "from_standard_map",
@@ -56,6 +57,7 @@ __all__ = [
     "stochasticity_parameter",
     "crossing_times",
     "to_standard_map",
+    "transport_threshold",
 ]
 
 #: Greene's critical value: the last invariant circle (golden-mean rotation number) breaks.
@@ -309,3 +311,88 @@ def crossing_times(excess, *, orbits: int = 256,
     return CrossingTimes(excess, times, max_iterations, median,
                          np.stack([_median(x) for x in halves], axis=-1), _fastest(times),
                          np.stack([_fastest(x) for x in halves], axis=-1), slope)
+
+
+@dataclass(frozen=True)
+class TransportThreshold:
+    """Finite-time threshold of global transport in the standard map, read off the fastest orbit.
+
+    The threshold depends on how many orbits are started (the fastest of more
+    orbits crosses sooner); :class:`CrossingTimes` has a statistic that does not.
+
+    Attributes
+    ----------
+    ks : ndarray, shape (a,)
+        The grid of ``K`` scanned.
+    crossing : ndarray, shape (a,)
+        Fewest iterations any orbit of the ensemble needed to cross ``2 pi``
+        in ``I`` at each ``K`` (``-1``: none within the longest run).
+    iterations : ndarray, shape (r,)
+        Run lengths asked about.
+    thresholds : ndarray, shape (r,)
+        For each run length ``N``: the smallest grid ``K`` from which on every
+        larger grid ``K`` sees a crossing within ``N`` iterations.
+    orbits : int
+        Orbits per ``K``.
+    """
+
+    ks: np.ndarray
+    crossing: np.ndarray
+    iterations: np.ndarray
+    thresholds: np.ndarray
+    orbits: int
+
+    @property
+    def excess(self) -> np.ndarray:
+        """``threshold / K_c - 1`` per run length."""
+        return self.thresholds / GREENE_K - 1
+
+
+def transport_threshold(iterations=(100, 1000, 10_000, 100_000), *, ks=None,
+                        orbits: int = 16) -> TransportThreshold:
+    """Find, for each run length, the ``K`` above which some orbit crosses a period of ``I``.
+
+    A statistic of the ensemble's fastest orbit: it falls as ``orbits`` grows,
+    so it measures the ensemble as much as the map. :func:`crossing_times`
+    gives the median crossing time, which does not drift with the number of
+    orbits.
+
+    The orbits start in the chaotic layer of the main resonance, next to its
+    hyperbolic fixed point ``(phi, I) = (0, 0)`` (``phi = 10^-3 .. 10^-1``),
+    which is where a crossing is quickest wherever one is possible.
+
+    Parameters
+    ----------
+    iterations : sequence of int
+        Run lengths ``N``.
+    ks : array_like, optional
+        Increasing grid of ``K``; by default ``0.90 .. 2.0`` in steps of 0.005.
+    orbits : int
+        Orbits per ``K``, ``>= 1``.
+
+    Returns
+    -------
+    TransportThreshold
+    """
+    if isinstance(iterations, str) or not np.iterable(iterations) or len(iterations) == 0:
+        raise TypeError(f"`iterations` must be a non-empty sequence of run lengths (integers "
+                        f">= 1), got {iterations!r}")
+    iterations = np.array([check.integer_at_least("iterations", n, 1) for n in iterations])
+    ks = np.arange(0.90, 2.0 + 1e-9, 0.005) if ks is None else np.asarray(ks, float)
+    if ks.ndim != 1 or ks.size < 2 or np.any(np.diff(ks) <= 0):
+        raise ValueError("`ks` must be an increasing 1-d grid of at least two values")
+    orbits = check.integer_at_least("orbits", orbits, 1)
+    phi0 = np.geomspace(1e-3, 1e-1, orbits)
+    steps = first_crossings(ks, phi0, np.zeros(orbits), int(iterations.max()))
+    fastest = np.where(steps < 0, np.iinfo(np.int64).max, steps).min(axis=1)
+    crossing = np.where(fastest == np.iinfo(np.int64).max, -1, fastest)
+    thresholds = []
+    for n in iterations:
+        fails = np.flatnonzero((crossing < 0) | (crossing > n))
+        if fails.size == 0:
+            thresholds.append(ks[0])
+        elif fails[-1] == ks.size - 1:
+            thresholds.append(np.nan)  # not even the largest K crossed in time
+        else:
+            thresholds.append(ks[fails[-1] + 1])
+    return TransportThreshold(ks, crossing, iterations, np.array(thresholds), orbits)

@@ -64,6 +64,7 @@ from .geometric import (
     plot_root_branch,
     plot_standard_map,
     plot_step_sizes,
+    plot_transport_threshold,
 )
 from .methods import (
     plot_amplification,
@@ -150,6 +151,7 @@ __all__ = [
     "plot_standard_map",
     "plot_step_sizes",
     "plot_stroboscopic",
+    "plot_transport_threshold",
     "plot_work_precision",
     "subscript",
     "wrap_angle",

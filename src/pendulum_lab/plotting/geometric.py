@@ -30,6 +30,7 @@ __all__ = [
     "plot_root_branch",
     "plot_standard_map",
     "plot_step_sizes",
+    "plot_transport_threshold",
 ]
 
 
@@ -302,6 +303,21 @@ def plot_crossing_times(result, ax=None):
     ax.set_xticks(result.excess, [f"{x:.2g}" for x in result.excess])
     ax.set_xlabel("K - K_c")
     ax.set_ylabel("iterations to cross 2π in I")
+    ax.legend(fontsize=8)
+    return ax.figure
+
+
+def plot_transport_threshold(result, ax=None):
+    """Finite-time transport threshold (the fastest orbit's) against the number of iterations.
+
+    With Greene's K_c for reference. The threshold depends on the number of
+    orbits started; :func:`plot_crossing_times` draws the median instead.
+    """
+    ax = get_axes(ax)
+    ax.semilogx(result.iterations, result.thresholds, "o-", label="smallest K with crossings")
+    ax.axhline(GREENE_K, color="black", ls="--", label=f"Greene's K_c = {GREENE_K:.4f}")
+    ax.set_xlabel("iterations N")
+    ax.set_ylabel("K")
     ax.legend(fontsize=8)
     return ax.figure
 
