@@ -6,8 +6,7 @@ stages that LLVM turns into SIMD instructions, 8 stages per pass. A call to
 the C library's ``sin`` stops that: LLVM cannot vectorize an opaque call
 (Numba's LLVM has no vector math library). These functions compute the same
 values from additions and multiplications alone, without branches, so the
-loop vectorizes: the double pendulum's field at 8 stages costs about two
-calls of ``hamilton`` (measured).
+loop vectorizes (what that buys, measured: docs/design/stage-kernel.md).
 
 How: ``x = k pi/2 + r`` with ``|r| <= pi/4`` (Cody and Waite's reduction, with
 ``pi/2`` split into three parts whose first two have 33 significant bits, so
