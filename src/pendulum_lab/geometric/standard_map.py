@@ -12,16 +12,18 @@ lie on invariant circles that wind around the cylinder and separate
 ``I`` below them from ``I`` above; the last of them, with golden-mean
 rotation number, breaks at Greene's ``K_c = 0.971635...``. Beyond it an
 orbit can travel through a whole period ``2 pi`` of ``I``: global transport.
-In a finite run the crossing is seen only once ``K`` exceeds ``K_c`` by
-enough, since the crossing time diverges as ``K -> K_c`` (Chirikov: roughly
-like ``(K - K_c)^-3``); :func:`transport_threshold` measures that
-finite-time threshold. Greene's residue criterion locates ``K_c`` itself:
-:func:`residue` is the residue ``R = (2 - tr M) / 4`` of a symmetric periodic
-orbit of rotation number ``p / q``, and along the golden mean's approximants
-``F_(j-1) / F_j`` (Fibonacci numbers) the residues fall to 0 below ``K_c``,
-grow without bound above, and stay near ``1/4`` at it;
-:func:`residue_crossing` gives the ``K`` where ``R = 1/4``, which tends to
-``K_c`` as ``q`` grows.
+Just above ``K_c`` the broken circle leaves a *cantorus* whose gaps let orbits
+through slowly: the flux through it vanishes like ``(K - K_c)^eta`` with
+``eta ~ 3.01`` [MMP], so crossing times grow like ``(K - K_c)^-3``.
+:func:`crossing_times` measures the median crossing time of an ensemble, a
+statistic that, unlike the fastest orbit's time, does not drift with the
+number of orbits.
+Greene's residue criterion locates ``K_c`` itself: :func:`residue` is the residue
+``R = (2 - tr M) / 4`` of a symmetric periodic orbit of rotation number ``p / q``, and along
+the golden mean's approximants ``F_(j-1) / F_j`` (Fibonacci numbers) the residues fall to 0
+below ``K_c``, grow without bound above, and stay near ``1/4`` at it;
+:func:`residue_crossing` gives the ``K`` where ``R = 1/4``, which tends to ``K_c`` as ``q``
+grows.
 
 References
 ----------
@@ -31,6 +33,11 @@ References
    J. Math. Phys. 20 (1979) 1183-1201.
 .. [MacKay] R. S. MacKay, "A renormalization approach to invariant circles in
    area-preserving maps", Physica D 7 (1983) 283-300 (K_c = 0.971635406).
+.. [MMP] R. S. MacKay, J. D. Meiss, I. C. Percival, "Transport in Hamiltonian
+   systems", Physica D 13 (1984) 55-81 (the flux through cantori and its
+   exponent).
+.. [Meiss] J. D. Meiss, "Symplectic maps, variational principles, and
+   transport", Rev. Mod. Phys. 64 (1992) 795-848 (transport through cantori).
 """
 
 from __future__ import annotations
@@ -46,9 +53,12 @@ from ..model.pendulum import PendulumModel
 from .model_checks import simple_pendulum_model
 
 __all__ = [
+    "FLUX_EXPONENT",
     "GREENE_K",
+    "CrossingTimes",
     "TransportThreshold",
     "critical_step",
+    "crossing_times",
     "first_crossings",
     "from_standard_map",
     "iterate",
@@ -61,7 +71,8 @@ __all__ = [
 
 #: Greene's critical value: the last invariant circle (golden-mean rotation number) breaks.
 GREENE_K = 0.971635406
-
+#: MacKay, Meiss and Percival's exponent: the flux through the golden cantorus ~ (K - K_c)^eta.
+FLUX_EXPONENT = 3.01
 
 
 def stochasticity_parameter(model: PendulumModel, h: float) -> float:
@@ -204,8 +215,119 @@ def first_crossings(ks, phi0, action0, max_iterations: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class CrossingTimes:
+    """First-crossing times of an ensemble of standard-map orbits, against ``K - K_c``.
+
+    Attributes
+    ----------
+    excess : ndarray, shape (a,)
+        ``K - K_c`` for each row.
+    times : ndarray of int, shape (a, orbits)
+        First iteration at which ``I`` has moved by ``2 pi`` (``-1``: not
+        within ``max_iterations``).
+    max_iterations : int
+    median : ndarray, shape (a,)
+        Median crossing time over all orbits (``nan`` when half of them or
+        more did not cross in time: the median is then not known).
+    half_medians : ndarray, shape (a, 2)
+        The medians of the two halves of the ensemble (alternate orbits):
+        they agree within the sampling error, about ``1 / sqrt(orbits)``.
+    fastest, half_fastest : ndarray, shape (a,) and (a, 2)
+        The fewest iterations any orbit of the ensemble (of each half)
+        needed: this drifts with the number of orbits.
+    slope : float
+        Least-squares slope of ``log median`` against ``log (K - K_c)``
+        over the rows with a known median; MMP's law: ``-FLUX_EXPONENT``.
+    """
+
+    excess: np.ndarray
+    times: np.ndarray
+    max_iterations: int
+    median: np.ndarray
+    half_medians: np.ndarray
+    fastest: np.ndarray
+    half_fastest: np.ndarray
+    slope: float
+
+    @property
+    def orbits(self) -> int:
+        """Orbits per ``K``."""
+        return self.times.shape[1]
+
+
+def _median(times: np.ndarray) -> np.ndarray:
+    """Row medians with non-crossings (``-1``) counted as later than any crossing."""
+    later = np.where(times < 0, np.inf, times.astype(float))
+    median = np.median(later, axis=-1)
+    return np.where(np.isfinite(median), median, np.nan)
+
+
+def _fastest(times: np.ndarray) -> np.ndarray:
+    later = np.where(times < 0, np.inf, times.astype(float))
+    fastest = later.min(axis=-1)
+    return np.where(np.isfinite(fastest), fastest, np.nan)
+
+
+def crossing_times(excess, *, orbits: int = 256,
+                   max_iterations: int = 2_000_000) -> CrossingTimes:
+    """Median first-crossing time of ``I`` through a period ``2 pi`` at ``K = K_c + excess``.
+
+    The orbits start at ``I = 0`` with ``phi`` geometrically spaced over
+    ``10^-3 .. 10^-1``: next to the hyperbolic fixed point ``(0, 0)``, inside
+    its chaotic layer. The median of a few hundred crossing times is a
+    property of the map at ``K``, known to about ``1 / sqrt(orbits)``; the
+    fastest orbit's time is not (it falls as orbits are added).
+
+    Parameters
+    ----------
+    excess : array_like, shape (a,)
+        ``K - K_c > 0``.
+    orbits : int
+        Orbits per ``K``, even, ``>= 16``.
+    max_iterations : int
+        The longest run; a row's median is known when more than half of its
+        orbits crossed within it.
+
+    Returns
+    -------
+    CrossingTimes
+
+    References
+    ----------
+    MMP; Meiss; Chirikov.
+
+    Examples
+    --------
+    >>> result = crossing_times([0.5, 1.0], orbits=16, max_iterations=10**5)
+    >>> bool(result.median[1] < result.median[0])   # farther above K_c: quicker
+    True
+    """
+    excess = np.atleast_1d(np.asarray(excess, float))
+    if excess.ndim != 1 or not np.all(np.isfinite(excess)) or np.any(excess <= 0):
+        raise ValueError(f"`excess` (K - K_c) must be a 1-d array of positive numbers, got "
+                         f"{excess}")
+    orbits = check.integer_at_least("orbits", orbits, 16)
+    if orbits % 2:
+        raise ValueError(f"`orbits` must be even (two halves are compared), got {orbits}")
+    max_iterations = check.integer_at_least("max_iterations", max_iterations, 1)
+    phi0 = np.geomspace(1e-3, 1e-1, orbits)
+    times = first_crossings(GREENE_K + excess, phi0, np.zeros(orbits), max_iterations)
+    halves = (times[:, 0::2], times[:, 1::2])
+    median = _median(times)
+    known = np.isfinite(median)
+    slope = (float(np.polyfit(np.log(excess[known]), np.log(median[known]), 1)[0])
+             if known.sum() >= 2 else np.nan)
+    return CrossingTimes(excess, times, max_iterations, median,
+                         np.stack([_median(x) for x in halves], axis=-1), _fastest(times),
+                         np.stack([_fastest(x) for x in halves], axis=-1), slope)
+
+
+@dataclass(frozen=True)
 class TransportThreshold:
-    """Finite-time threshold of global transport in the standard map.
+    """Finite-time threshold of global transport in the standard map, read off the fastest orbit.
+
+    The threshold depends on how many orbits are started (the fastest of more
+    orbits crosses sooner); :class:`CrossingTimes` has a statistic that does not.
 
     Attributes
     ----------
@@ -237,7 +359,12 @@ class TransportThreshold:
 
 def transport_threshold(iterations=(100, 1000, 10_000, 100_000), *, ks=None,
                         orbits: int = 16) -> TransportThreshold:
-    """Find, for each run length, the ``K`` above which orbits cross a period of ``I``.
+    """Find, for each run length, the ``K`` above which some orbit crosses a period of ``I``.
+
+    A statistic of the ensemble's fastest orbit: it falls as ``orbits`` grows,
+    so it measures the ensemble as much as the map. :func:`crossing_times`
+    gives the median crossing time, which does not drift with the number of
+    orbits.
 
     The orbits start in the chaotic layer of the main resonance, next to its
     hyperbolic fixed point ``(phi, I) = (0, 0)`` (``phi = 10^-3 .. 10^-1``),
