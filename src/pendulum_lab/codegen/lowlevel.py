@@ -15,7 +15,7 @@ minor version for this reason):
   vectorizes (glrk16's stage sums took half the time).
 * **Bit casts** (:func:`float_bits`, :func:`bits_float`): the stopping rule takes maxima of
   non-negative floats as integers, which LLVM vectorizes and a floating-point maximum it would
-  not (3 times as fast on 32 components).
+  not (105 against 51 ns on 32 components, the rule deciding the same).
 * **One ``sincos`` call** (:func:`sincos`): the sine and cosine of one angle from one call of
   the C library, sharing the argument reduction as a C compiler would.
 * **Sines and cosines the compiler can vectorize** (:func:`lane_sin`, :func:`lane_cos`,
