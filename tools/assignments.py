@@ -53,9 +53,11 @@ CELL_SECONDS = 120.0
 TOTAL_SECONDS = 900.0
 
 #: Put first in every graded submission: a per-cell time limit inside the grading kernel. A
-#: SIGALRM started before each cell and cancelled after it raises TimeoutError in whatever runs
+#: timer started before each cell and cancelled after it raises TimeoutError in whatever runs
 #: too long: an answer cell, or a test calling the student's function (otter then records that
-#: test as failed, with the message, and goes on). Otter puts its own set-up cells before it.
+#: test as failed, with the message, and goes on to the next test). The timer fires again every
+#: ``seconds`` until the cell ends, so a second test stuck in the same function is stopped too.
+#: Otter puts its own set-up cells before this one.
 TIME_LIMIT_CELL = """\
 # Added by the grader: no later cell may run longer than {seconds:g} s.
 def _grader_time_limit(seconds):
@@ -68,7 +70,8 @@ def _grader_time_limit(seconds):
 
     signal.signal(signal.SIGALRM, stop)
     events = get_ipython().events
-    events.register("pre_run_cell", lambda info: signal.setitimer(signal.ITIMER_REAL, seconds))
+    events.register("pre_run_cell",
+                    lambda info: signal.setitimer(signal.ITIMER_REAL, seconds, seconds))
     events.register("post_run_cell", lambda result: signal.setitimer(signal.ITIMER_REAL, 0))
 
 
@@ -273,7 +276,8 @@ def grade(folder: Path, submission: Path, *, cell_seconds: float = CELL_SECONDS,
         TIME_LIMIT_CELL.format(seconds=float(cell_seconds))))
     with tempfile.TemporaryDirectory(prefix="grade-") as work:
         work = Path(work)
-        copy = work / submission.name
+        # Under the name it was handed out with: its first cell opens the notebook by name.
+        copy = work / f"{folder.name}.ipynb"
         nbformat.write(notebook, copy)
         command = [sys.executable, "-m", "otter", "run", "-a", str(autograder_zip(folder)),
                    "-o", str(work), "--no-logo", "-p", str(copy)]
