@@ -11,9 +11,9 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .. import _validation as check
-from .._angles import wrap_angle
-from ..simulate import Trajectory
+from .. import validation as check
+from ..driver.simulate import Trajectory
+from ..model.angles import wrap_angle
 
 __all__ = [
     "KINETIC",

@@ -37,11 +37,12 @@ import traitlets
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .. import _validation as check
 from .. import chaos, plotting
-from .._png import png_bytes
-from ..model import PendulumModel
-from ..simulate import simulate
+from .. import validation as check
+from ..driver.simulate import simulate
+from ..model import require_model
+from ..model.pendulum import PendulumModel
+from ..plotting.png import png_bytes
 from .channel import STATIC, ReplayWidget, float32_buffer
 from .controls import check_steps, column, run_controls, slider
 from .instrument import EXPECTED_ERRORS, WidgetWithPicture
@@ -280,7 +281,7 @@ def section_reach(model: PendulumModel, energy: float, theta2) -> np.ndarray:
     >>> float(section_reach(dp, -20.0, 0.0) ** 2 / 2)   # M_22 = 1: the energy above V(0, 0)
     9.43
     """
-    check.pendulum_model(model)
+    require_model(model)
     energy = check.real_number("energy", energy)
     theta2 = np.asarray(theta2, dtype=float)
     theta = np.stack([np.zeros_like(theta2), theta2], axis=-1)
@@ -394,7 +395,7 @@ def section_explorer(
     >>> len(ex.orbits), ex.message.startswith("No orbit launched")
     (1, True)
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     if model.n != 2:
         raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
     depth = -float(model.potential_energy(np.zeros(2)))
@@ -473,7 +474,7 @@ def portrait_explorer(
     >>> bool(ex.omega_max > 9.5 and ex.orbits[0].points[:, 0].min() > -3.1416)
     True
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     if model.n != 1:
         raise ValueError(f"`model` must be a simple pendulum (n = 1), got n = {model.n}")
     return PortraitExplorer(model, t_end, dt, method)

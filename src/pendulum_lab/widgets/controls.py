@@ -16,18 +16,18 @@ from collections.abc import Sequence
 import ipywidgets as widgets
 import numpy as np
 
-from .. import _validation as check
+from .. import validation as check
+from ..driver.simulate import Trajectory, simulate, step_count
 from ..integrators import METHODS, get_method
-from ..model import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from ..model import require_model
+from ..model.pendulum import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
 from ..plotting import link_label
-from ..simulate import Trajectory, simulate, step_count
 
 __all__ = [
     "DT_CHOICES",
     "MAX_STEPS",
     "SIMULATOR_T_END",
     "SPEEDS",
-    "TRAIL",
     "build_simulator",
     "check_steps",
     "column",
@@ -49,8 +49,6 @@ DT_CHOICES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5)
 MAX_STEPS = 100_000
 #: Playback speeds the simulators offer: simulated seconds per real second.
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
-#: Default length of the trail behind the last bob [s].
-TRAIL = 2.0
 #: The range of a simulator's run length ``t_end`` [s].
 SIMULATOR_T_END = (1.0, 60.0)
 
@@ -306,7 +304,7 @@ def build_simulator(
         For an argument out of range, or a first run that cannot be computed
         (the simulator's message).
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     theta0, omega0 = start_state(model.n, theta0, omega0)
     speed = check.choice("speed", speed, SPEEDS)
     trail = check.non_negative_number("trail", trail)

@@ -17,11 +17,12 @@ import ipywidgets as widgets
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from .. import _validation as check
 from .. import plotting
+from .. import validation as check
 from ..analysis import equilibrium_angles, find_equilibrium, rest_state_at_energy
-from ..model import PendulumModel
-from ..simulate import simulate
+from ..driver.simulate import simulate
+from ..model import require_model
+from ..model.pendulum import PendulumModel
 from .background import BackgroundCache
 from .controls import (
     DESCRIPTION_WIDTH,
@@ -264,7 +265,7 @@ def explore(
     >>> float(ex.trajectory.theta[0, 0])
     0.5
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     theta0, omega0 = start_state(model.n, theta0, omega0)
     ex = Explorer(model, method, t_end, dt, theta0, omega0, plots)
     ex.update()
@@ -317,7 +318,7 @@ class EquilibriumExplorer(Instrument):
 
     @property
     def equilibrium(self):
-        """The selected :class:`~pendulum_lab.mechanics.Equilibrium`."""
+        """The selected :class:`~pendulum_lab.symbolic.mechanics.Equilibrium`."""
         return self.model.chain.equilibrium(self.controls["equilibrium"].value)
 
     def compute(self):
@@ -383,7 +384,7 @@ def explore_equilibrium(
         ``"method"``, ``"dt"``, ``"t_end"``; the left panel shows the
         linearised motion ``exp(A t) x0``, the right the simulation.
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     n = model.n
     equilibrium = find_equilibrium(model, equilibrium).name
     offset = check.state_vector("offset", [0.05] + [0.0] * (n - 1) if offset is None else offset,
@@ -475,7 +476,7 @@ def explore_energy(
     EnergyExplorer
         Controls ``"energy"``, ``"method"``, ``"dt"``, ``"t_end"``.
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     depth = -float(model.potential_energy(np.zeros(model.n)))
     if depth <= 0:
         raise ValueError(f"the model's `g` must be positive, got {model.g}")

@@ -22,10 +22,10 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .._png import png_bytes
+from ..driver.simulate import Trajectory
 from ..integrators import ConvergenceError
-from ..model import PendulumModel
-from ..simulate import Trajectory
+from ..model.pendulum import PendulumModel
+from ..plotting.png import png_bytes
 from .controls import column
 
 __all__ = ["DPI", "EXPECTED_ERRORS", "ROW_HEIGHT", "WIDTH", "Instrument", "WidgetWithPicture"]
