@@ -1,87 +1,32 @@
 """Fixtures of the assignment tests: every assignment built once per session, its solutions graded.
 
-The tests drive ``tools/assignments.py`` (the command behind ``make assignments``) as a library.
-Each grading runs a submission in a fresh kernel (about 10 s here once the integrators are
-compiled), so the solutions are graded once, here, and shared; the first grading also compiles
-what the later ones reuse. Without otter-grader (the ``assignments`` extra) the tests are skipped
-with the reason, and fail instead when ``CI=true``.
+The solutions are graded first: that grading also compiles the integrators that the later
+gradings reuse (about 10 s per grading here once compiled, on an idle machine). Without
+otter-grader (the ``assignments`` extra) the tests are skipped with the reason, and fail instead
+when ``CI=true``.
 """
 
 from __future__ import annotations
 
-import copy
 import importlib.util
 import json
 import os
-import sys
 from pathlib import Path
 
-import nbformat
 import pytest
-
-REPO_ROOT = Path(__file__).resolve().parents[2]
-ARTIFACTS = REPO_ROOT / "test-artifacts" / "assignments"
-
-
-def _load_tool():
-    spec = importlib.util.spec_from_file_location("assignment_tool",
-                                                  REPO_ROOT / "tools" / "assignments.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
-
-
-tool = _load_tool()
-NAMES = [path.stem for path in tool.masters()]
+from assignment_harness import ARTIFACTS, NAMES, Kit
 
 
 def pytest_collection_modifyitems(config, items):
-    if importlib.util.find_spec("otter") is not None:
+    here = Path(__file__).parent
+    ours = [item for item in items if here in Path(str(item.fspath)).parents]
+    if not ours or importlib.util.find_spec("otter") is not None:
         return
     reason = "otter-grader is not installed (pip install -e '.[assignments]')"
     if os.environ.get("CI") == "true":
         raise pytest.UsageError(f"CI: {reason}")
-    here = Path(__file__).parent
-    for item in items:
-        if here in Path(str(item.fspath)).parents:
-            item.add_marker(pytest.mark.skip(reason=reason))
-
-
-class Kit:
-    """The built assignments of this session and the gradings made so far."""
-
-    def __init__(self, dist: Path, work: Path):
-        self.dist = dist
-        self.work = work
-        self.folders = {name: tool.build(master, dist) for name, master in
-                        zip(NAMES, tool.masters(), strict=True)}
-        self._solutions = {}
-        self.seconds = {}
-
-    def master(self, name: str) -> nbformat.NotebookNode:
-        return nbformat.read(tool.ASSIGNMENTS / f"{name}.ipynb", as_version=4)
-
-    def notebook(self, name: str, version: str) -> nbformat.NotebookNode:
-        """``version``: "student" (handed out) or "autograder" (the solutions)."""
-        return nbformat.read(self.folders[name] / version / f"{name}.ipynb", as_version=4)
-
-    def grade(self, name: str, notebook, label: str, **limits):
-        """Grade ``notebook`` (a NotebookNode, or a path) as a submission of ``name``."""
-        if isinstance(notebook, nbformat.NotebookNode):
-            path = self.work / f"{name}-{label}.ipynb"
-            nbformat.write(notebook, path)
-        else:
-            path = Path(notebook)
-        result = tool.grade(self.folders[name], path, **limits)
-        self.seconds[f"{name} {label}"] = round(result.seconds, 1)
-        return result
-
-    def solutions(self, name: str):
-        if name not in self._solutions:
-            self._solutions[name] = self.grade(
-                name, self.folders[name] / "autograder" / f"{name}.ipynb", "solutions")
-        return self._solutions[name]
+    for item in ours:
+        item.add_marker(pytest.mark.skip(reason=reason))
 
 
 @pytest.fixture(scope="session")
@@ -93,12 +38,3 @@ def kit(tmp_path_factory):
     yield built
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     (ARTIFACTS / "grading_seconds.json").write_text(json.dumps(built.seconds, indent=1) + "\n")
-
-
-def replace_cell(notebook, marker: str, source: str):
-    """A copy of ``notebook`` whose one code cell containing ``marker`` now holds ``source``."""
-    changed = copy.deepcopy(notebook)
-    hits = [cell for cell in changed.cells if cell.cell_type == "code" and marker in cell.source]
-    assert len(hits) == 1, f"{len(hits)} code cells contain {marker!r}"
-    hits[0].source = source
-    return changed

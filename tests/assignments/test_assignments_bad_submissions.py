@@ -15,7 +15,7 @@ import sys
 import textwrap
 
 import pytest
-from conftest import REPO_ROOT, replace_cell
+from assignment_harness import REPO_ROOT, replace_cell
 
 A1 = "01_derivations_and_fixed_points"
 A2 = "02_integrators_and_orders"

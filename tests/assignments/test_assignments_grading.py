@@ -12,7 +12,7 @@ import re
 import zipfile
 
 import pytest
-from conftest import NAMES, replace_cell, tool
+from assignment_harness import NAMES, replace_cell, tool
 
 # One deliberately wrong answer per assignment: the question, the answer cell (a string only it
 # holds) and the slip, a mistake a student could make. No later question uses these answers.
