@@ -3,6 +3,8 @@
 #   make test   create or update the environment and run the whole test suite
 # and the course website:
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
+# and the instructor's kit:
+#   make assignments   build every graded assignment into dist/assignments/<name>/
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -10,12 +12,12 @@ BIN := $(VENV)/bin
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
-.PHONY: lab test check lint bench docs mathjax clean
+.PHONY: lab test check lint bench docs mathjax assignments clean
 
 $(BIN)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e ".[lab,test,docs,bench]"
+	$(BIN)/python -m pip install -e ".[lab,test,docs,bench,assignments]"
 	touch $@
 
 # The browser build of MathJax (es5/), without the SVG output and the other combined files.
@@ -34,6 +36,10 @@ mathjax: $(MATHJAX)
 docs: $(BIN)/.installed $(MATHJAX)
 	$(BIN)/python tools/build_site.py
 
+# otter assign on every master notebook of assignments/, then its solutions graded (offline).
+assignments: $(BIN)/.installed
+	$(BIN)/python tools/assignments.py build
+
 lab: $(BIN)/.installed
 	$(BIN)/pendulum-lab
 
@@ -43,10 +49,11 @@ test: $(BIN)/.installed $(MATHJAX)
 	$(BIN)/python tools/run_tests.py
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
-# the notebooks, the browser, the website or Binder (docs/testing.md).
+# the notebooks, the browser, the website, Binder or the graded assignments (docs/testing.md).
 check: $(BIN)/.installed
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder
+	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder \
+		--ignore=tests/assignments
 
 bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/run.py
