@@ -73,8 +73,8 @@ def test_angle_slider_recomputes_and_redraws(dp_explorer):
 def test_set_controls_changes_several_and_recomputes_once(dp_explorer, monkeypatch):
     ex = dp_explorer
     computed = []
-    compute = ex.compute
-    monkeypatch.setattr(ex, "compute", lambda: computed.append(1) or compute())
+    prepare = ex.prepare
+    monkeypatch.setattr(ex, "prepare", lambda: computed.append(1) or prepare())
     assert ex.set_controls({"theta1": 0.4, "theta2": -0.3, "omega1": 1.0})
     assert len(computed) == 1
     np.testing.assert_array_equal(ex.trajectory.theta[0], [0.4, -0.3])

@@ -16,6 +16,7 @@ import re
 import tempfile
 from pathlib import Path
 
+import matplotlib as mpl
 import numpy as np
 from matplotlib.animation import FFMpegWriter, HTMLWriter, PillowWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -32,6 +33,7 @@ from .scene import FPS, PendulumScene, encode_frame, frame_indices, scene_runs
 __all__ = [
     "EXPORT_SIZE",
     "MAX_FRAMES",
+    "MIN_TEXT_PIXELS",
     "count_frames",
     "html_animation",
     "save_animation",
@@ -43,6 +45,9 @@ __all__ = [
 MAX_FRAMES = 300
 #: Size of the exported animations' figure [inches].
 EXPORT_SIZE = (9, 3.6)
+#: Smallest height of the exports' text [pixels of the frame]: at a low ``dpi`` the text is
+#: set larger than matplotlib's default so that it stays legible.
+MIN_TEXT_PIXELS = 11
 # matplotlib's player links its button icons from a CDN; an animation must not load anything
 # from outside (JupyterLab and the course website have the icon font already).
 _EXTERNAL_LINK = re.compile(r"<link\b[^>]*\bhref=[\"']https?://[^>]*>\s*", re.IGNORECASE)
@@ -58,10 +63,14 @@ def _check_run(traj, model) -> Trajectory:
 def _export_scene(
     traj, model, trail: float, dpi: float, labels=None, animated: bool = True
 ) -> tuple[Figure, PendulumScene]:
-    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the runs' scene."""
+    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the runs' scene, its
+    text at least :data:`MIN_TEXT_PIXELS` high."""
     figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
     FigureCanvasAgg(figure)
-    return figure, PendulumScene(figure, model, traj, trail, animated=animated, labels=labels)
+    size = max(float(mpl.rcParams["font.size"]), MIN_TEXT_PIXELS * 72 / float(dpi))
+    scene = PendulumScene(figure, model, traj, trail, animated=animated, labels=labels,
+                          font_size=size)
+    return figure, scene
 
 
 class _Blitting:

@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.ticker import NullFormatter
 
 from ..geometric.standard_map import GREENE_K
-from .figures import axis_label, get_axes, get_axes_grid, subscript
+from .figures import axis_label, get_axes, get_axes_grid, subscript, superscript
 
 __all__ = [
     "plot_adaptive_energy",
@@ -130,7 +130,7 @@ def plot_projected_areas(result, ax=None):
     ax.plot(result.t, result.invariant, color="black", lw=2, label="sum over the planes")
     ax.plot(result.t, result.velocity.sum(axis=1), color="tab:red", label="sum in (θᵢ, ωᵢ)")
     ax.set_xlabel(axis_label("t"))
-    ax.set_ylabel("oriented area")
+    ax.set_ylabel("oriented area (rad kg m²/s)")
     ax.set_title(f"{result.method}, h = {result.dt:g}", fontsize=10)
     ax.legend(fontsize=8)
     return ax.figure
@@ -141,7 +141,7 @@ def plot_modified_energy_orders(result, ax=None):
     ax = get_axes(ax)
     for k, errors, slope, expected in zip(result.orders, result.errors, result.slopes,
                                           result.expected):
-        name = "H" if k == 0 else rf"$\tilde H$ to $h^{k}$"
+        name = "H" if k == 0 else f"modified H to h{superscript(k)}"
         ax.loglog(result.dts, errors, marker="o",
                   label=f"{name}: slope {slope:.2f} (theory {expected})")
     ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short decades
@@ -157,7 +157,7 @@ def plot_energy_drift(result, ax=None):
     ax = get_axes(ax)
     ax.loglog(result.dts, np.abs(result.measured), "o", label="measured (fit over the run)")
     ax.loglog(result.dts, np.abs(result.predicted), "-",
-              label=rf"predicted, $\propto h^{result.power}$")
+              label=f"predicted, ∝ h{superscript(result.power)}")
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(axis_label("step"))
     ax.set_ylabel("|dE/dt| (J/s)")
@@ -231,7 +231,7 @@ def plot_adaptive_energy(runs, ax=None, envelope=False):
         else:
             ax.plot(run.t, run.energy_error, lw=0.8, label=label)
     ax.set_xlabel(axis_label("t"))
-    ax.set_ylabel("largest |H - H(0)| so far (J)" if envelope else "H - H(0) (J)")
+    ax.set_ylabel("largest |H − H(0)| so far (J)" if envelope else "H − H(0) (J)")
     ax.legend(fontsize=8)
     return ax.figure
 
