@@ -19,6 +19,7 @@ applies), and a method it refuses is refused here with the driver's reason
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import ipywidgets as widgets
@@ -88,7 +89,15 @@ def control_names(n: int) -> dict[str, list[str]]:
 def slider(
     value: float, low: float, high: float, step: float, description: str, fmt: str = ".2f"
 ) -> widgets.FloatSlider:
-    """A float slider whose range always contains ``value``; the unit is in the description."""
+    """A float slider whose range always contains ``value``; the unit is in the description.
+
+    The range's ends are rounded inward to whole steps: the browser's slider
+    counts its steps from ``min``, so that a step from the keyboard or the
+    mouse lands on round values (2.00, 2.01, ...), as its readout shows them,
+    not on ``-pi + k step``.
+    """
+    low = math.ceil(low / step - 1e-9) * step
+    high = math.floor(high / step + 1e-9) * step
     return widgets.FloatSlider(
         value=value,
         min=min(low, value),
