@@ -230,7 +230,8 @@ def explore(
     Parameters
     ----------
     model : PendulumModel
-        Any chain; its masses, lengths and ``g`` are the sliders' start values.
+        Any chain; its masses, lengths and ``g`` are the sliders' start values,
+        and its damping and drive stay as they are (noted beside the sliders).
     theta0, omega0 : array_like, shape (n,), optional
         Initial angles [rad] in ``[-pi, pi]`` and angular velocities [rad/s];
         default 1 rad for one link, ``(2.0, 2.5)`` for two (a chaotic start),
@@ -239,7 +240,10 @@ def explore(
         Duration and step [s]. ``dt`` is offered on a ladder of values
         (:data:`DT_CHOICES`, plus the given one).
     method : str
-        A key of :data:`pendulum_lab.METHODS` (the dropdown's start value).
+        A method :func:`pendulum_lab.simulate` accepts for ``model`` (the
+        dropdown's start value; the dropdown offers the others of
+        :data:`pendulum_lab.METHODS` it accepts); another raises
+        ``ValueError`` with the driver's reason.
     plots : sequence of str or callable
         Panels, by name from :data:`pendulum_lab.plotting.PANELS`
         (``"energy"``, ``"energy_error"``, ``"angles"``, ``"phase"``,
@@ -253,7 +257,8 @@ def explore(
         ``controls`` (``"theta1"``, ..., ``"omega1"``, ..., ``"m1"``, ...,
         ``"l1"``, ..., ``"g"``, ``"dt"``, ``"t_end"``, ``"method"``; for one
         link ``"theta"``, ``"omega"``, ``"mass"``, ``"length"``),
-        ``trajectory``, ``figure``, ``message``, ``model`` and ``update()``.
+        ``trajectory``, ``figure``, ``message``, ``model``, ``code()`` (the
+        ``pl.simulate`` call of the run shown) and ``update()``.
         An update redraws only the data of a panel whose axes, ticks and
         labels are unchanged (``background`` counts them); to that end each
         autoscaled axis's limits are rounded out a little (:func:`round_limits`).

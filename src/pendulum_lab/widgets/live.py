@@ -19,6 +19,13 @@ In the browser
     chain follows; on release the kernel restarts the motion from there, at
     rest (:meth:`LiveSimulator.drag`).
 
+A description of the state shown (time, kinetic, potential and total
+energy, the energy error) sits in an ARIA live region beside the canvas,
+updated when the state shown changes other than by playing (a step, a
+scrub, pause, a new run) and when playing starts, so that a screen reader
+announces it. For a model that does not conserve energy (damping, a drive),
+the trace and the description call ``E - E(0)`` an energy change.
+
 The drawing counts the frames it has drawn in the ``data-frames`` attribute
 of its root element (``.plab-live``), for measuring the frame rate, and the
 mean time it spent drawing one in ``data-draw-ms``.
