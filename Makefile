@@ -10,7 +10,7 @@ BIN := $(VENV)/bin
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
-.PHONY: lab test lint bench docs mathjax clean
+.PHONY: lab test check lint bench docs mathjax clean
 
 $(BIN)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -41,6 +41,12 @@ lab: $(BIN)/.installed
 test: $(BIN)/.installed $(MATHJAX)
 	$(BIN)/ruff check .
 	$(BIN)/python tools/run_tests.py
+
+# The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
+# the notebooks, the browser, the website or Binder (docs/testing.md).
+check: $(BIN)/.installed
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder
 
 bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/run.py

@@ -2,7 +2,7 @@
 
 The map of issue 17 (1000 x 1000 cells to t = 10 in the full configuration)
 runs once in this process and twice on a local cluster of worker processes
-(``pendulum_lab.cluster``: the cells cut into chunks, the same function and
+(``pendulum_lab.driver.cluster``: the cells cut into chunks, the same function and
 kernels on every worker): with the environment Dask gives its workers, and
 without its ``MALLOC_TRIM_THRESHOLD_``. Reported: cells per second per worker
 against the in-process run's per core, both by the wall clock and per

@@ -171,7 +171,7 @@ def _import_times() -> list[tuple[str, float]]:
     """Cumulative import times of the heavy dependencies and of pendulum_lab's modules.
 
     From ``python -X importtime -c "import pendulum_lab"``; nested entries
-    overlap (sympy is imported inside ``pendulum_lab.mechanics``).
+    overlap (sympy is imported inside ``pendulum_lab.symbolic.mechanics``).
     """
     out = subprocess.run(
         [sys.executable, "-X", "importtime", "-c", "import pendulum_lab"],

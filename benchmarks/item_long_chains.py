@@ -23,7 +23,7 @@ from numba import types
 
 import pendulum_lab as pl
 from pendulum_lab import codegen
-from pendulum_lab._signatures import HAMILTON, VECTOR
+from pendulum_lab.codegen.signatures import HAMILTON, VECTOR
 
 #: The two kernels are compared as first-class functions, the same call for both.
 HamiltonFn = types.FunctionType(HAMILTON)
@@ -96,7 +96,7 @@ def bench_long_chains(cfg: Config) -> Section:
                    "loop through a first-class function (as the integrators call it), CPU time "
                    "per call, median of the rounds. 'printed' = the kernels generated from the "
                    "SymPy expressions (what chains of every length used before issue 17), "
-                   "'looped' = pendulum_lab.long_chains (what every chain of three or more "
+                   "'looped' = pendulum_lab.codegen.long_chains (what every chain of three or more "
                    "links uses now).")
 
     # ---- cost per step against n

@@ -13,8 +13,8 @@ import numpy as np
 from harness import Config, Row, Section, explorer_start, fmt_time, interleave, med, timed
 
 import pendulum_lab as pl
-from pendulum_lab.discrete_mechanics import RULES
 from pendulum_lab.integrators import variational_method
+from pendulum_lab.symbolic.discrete_mechanics import RULES
 
 SOLVERS = ("fixed_point", "newton")
 # A fast state for the convergence scan: |omega| = 7 rad/s.
@@ -75,7 +75,7 @@ def bench_variational(cfg: Config) -> Section:
             f"{FAST_THETA.tolist()}, omega = {FAST_OMEGA.tolist()} rad/s, steps of 0.05 .. 0.95 s "
             f"converge up to {reach['fixed_point']:g} s (fixed point) and {reach['newton']:g} s "
             "(Newton); beyond a fold of the discrete equations Newton's method can converge to "
-            "a root off the small-step branch (tests/test_variational.py)."
+            "a root off the small-step branch (tests/integrators/test_variational.py)."
         )
         data[rule] = {"cpu": cpu, "iterations": iterations, "reach": reach, "ratio": ratio}
     return Section("variational", "7. Variational steps: fixed point or Newton", rows, details,

@@ -10,7 +10,7 @@ forcing (``model.chain``), solved symbolically and converted with
 ``heyoka.from_sympy``, on ``(theta, omega)``; pyhamsys (which takes a
 Python vector field ``y_dot(t, y)`` in canonical variables) gets our compiled
 Hamiltonian kernel, the fastest right-hand side we can hand it. This module
-is shared by the benchmark items and by ``tests/test_peers.py``.
+is shared by the benchmark items and by ``tests/benchmarks/test_peers.py``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 import sympy as sp
 
 from pendulum_lab import codegen
-from pendulum_lab.simulate import hamiltonian_field
+from pendulum_lab.driver.simulate import hamiltonian_field
 
 __all__ = [
     "heyoka_integrator",

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-BROWSER_SHARD = ["tests/browser", "tests/site", "tests/test_binder.py"]
+BROWSER_SHARD = ["tests/browser", "tests/site", "tests/binder"]
 CORE_SHARD = ["src", "tests", "notebooks"] + [f"--ignore={path}" for path in BROWSER_SHARD]
 
 

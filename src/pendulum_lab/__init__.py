@@ -1,13 +1,12 @@
 """pendulum_lab: Hamiltonian mechanics and geometric integration, through pendulums.
 
-Layers, each using only the ones before it:
+The package is layered; each layer uses only the ones before it:
 
-``mechanics`` (SymPy derivation) -> ``model`` (numeric: lambdified, or looped over
-the links of a long chain in ``long_chains``) ->
-``integrators`` (one-step maps of Hamiltonian vector fields) -> ``simulate``
-(and ``segments``, the same runs handed out piece by piece) -> ``events``,
-``analysis``, ``chaos``, ``plotting``, ``widgets``, ``animation``, ``report``;
-``cluster`` runs ensembles on a Dask cluster.
+``symbolic`` (SymPy derivations) -> ``codegen`` (compiled kernels) -> ``model`` (numeric
+models) -> ``integrators`` (one-step maps of vector fields) -> ``driver`` (simulate, the time
+loop, segments, events) -> ``analysis``, ``chaos``, ``geometric`` -> ``plotting``, ``widgets``,
+``animation`` -> ``app`` (the command line, the report, warm-up). Below them all,
+``validation`` checks arguments and ``exercises`` checks the notebooks' exercises.
 
 Quick start
 -----------
@@ -18,8 +17,16 @@ Quick start
 True
 """
 
-from .family import ModelFamily
-from .henon import henon_step
+from .driver import (
+    SegmentedRun,
+    Trajectory,
+    hamiltonian_field,
+    henon_step,
+    simulate,
+    simulate_segments,
+    step,
+    step_count,
+)
 from .integrators import (
     CONFORMAL_METHODS,
     METHODS,
@@ -28,18 +35,51 @@ from .integrators import (
     Method,
     get_method,
 )
-from .mechanics import Chain, derive_chain
-from .model import PendulumModel, double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
-from .segments import SegmentedRun, simulate_segments
-from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
+from .model import (
+    ModelFamily,
+    PendulumModel,
+    double_pendulum,
+    driven_pendulum,
+    n_pendulum,
+    simple_pendulum,
+)
+from .symbolic import Chain, derive_chain
+from .version import __version__
 
-__version__ = "0.1.0"
-
-# Submodules that pull in heavy dependencies (ipywidgets, matplotlib) load on
-# first use, so `pl.widgets.explore(...)` works without slowing `import pendulum_lab`.
-_LAZY_SUBMODULES = {"analysis", "animation", "chaos", "cluster", "codegen", "discrete_mechanics",
-                    "events", "geometric", "long_chains", "mechanics", "plotting", "report",
-                    "source", "tables", "timing", "warmup", "widgets"}
+# Layers loaded on first use (ipywidgets and matplotlib are slow to import), and the names the
+# modules had before the package was layered, each kept as an alias of its new place.
+_SUBMODULES = {
+    "analysis": "analysis",
+    "animation": "animation",
+    "app": "app",
+    "chaos": "chaos",
+    "cli": "app.cli",
+    "cluster": "driver.cluster",
+    "codegen": "codegen",
+    "discrete_mechanics": "symbolic.discrete_mechanics",
+    "driver": "driver",
+    "errata": "symbolic.errata",
+    "events": "driver.events",
+    "exercises": "exercises",
+    "family": "model.pendulum",
+    "geometric": "geometric",
+    "integrators": "integrators",
+    "long_chains": "codegen.long_chains",
+    "loops": "driver.loops",
+    "mechanics": "symbolic.mechanics",
+    "model": "model",
+    "plotting": "plotting",
+    "report": "app.report",
+    "segments": "driver.segments",
+    "source": "integrators.source",
+    "symbolic": "symbolic",
+    "tableau": "integrators.tableau",
+    "tables": "app.tables",
+    "timing": "app.timing",
+    "validation": "validation",
+    "warmup": "app.warmup",
+    "widgets": "widgets",
+}
 
 
 def __getattr__(name):
@@ -48,16 +88,18 @@ def __getattr__(name):
 
         return modified_hamiltonian
     if name == "warm_up":  # reaches every layer's kernels, loaded on use
-        from .warmup import warm_up
+        from .app.warmup import warm_up
 
         return warm_up
-    if name in _LAZY_SUBMODULES:
+    if name in _SUBMODULES:
         import importlib
 
-        return importlib.import_module(f".{name}", __name__)
+        return importlib.import_module(f".{_SUBMODULES[name]}", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
+
 __all__ = [
+    "__version__",
     "CONFORMAL_METHODS",
     "METHODS",
     "Chain",

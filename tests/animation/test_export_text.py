@@ -5,8 +5,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 import pendulum_lab as pl
-from pendulum_lab import animation
-from pendulum_lab.animation import export
+from pendulum_lab.plotting import scene as export
 
 DP = pl.double_pendulum()
 RUN = pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=1.0, dt=0.01)
@@ -31,7 +30,7 @@ def text_heights(figure, dpi) -> dict[str, float]:
 
 @pytest.mark.parametrize("dpi", [56, 64, 80])
 def test_the_export_scene_writes_every_text_at_least_eleven_pixels_high(dpi):
-    figure, scene = export._export_scene([RUN, RUN], DP, 1.0, dpi, labels=["a", "b"])
+    figure, scene = export.export_scene([RUN, RUN], DP, 1.0, dpi, labels=["a", "b"])
     heights = text_heights(figure, dpi)
     assert len(heights) > 10
     small = {name: round(px, 1) for name, px in heights.items()
@@ -44,7 +43,7 @@ def test_without_the_floor_a_low_resolution_header_is_tiny():
     # Negative control: matplotlib's default sizes at the exports' 64 dpi give the legend
     # above the panel some 7 pixels.
     figure = Figure(figsize=export.EXPORT_SIZE, dpi=64)
-    animation.PendulumScene(figure, DP, RUN, 1.0)
+    export.PendulumScene(figure, DP, RUN, 1.0)
     heights = text_heights(figure, 64)
     legend = [px for name, px in heights.items() if name.startswith("legend")]
     assert legend and max(legend) < 9

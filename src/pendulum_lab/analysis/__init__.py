@@ -2,7 +2,7 @@
 
 Each function returns numbers a test or a notebook can assert on; none
 prints or plots (figures are in :mod:`pendulum_lab.plotting`, tables in
-:mod:`pendulum_lab.tables`). By topic:
+:mod:`pendulum_lab.app.tables`). By topic:
 
 * :mod:`.structure`: Jacobians by finite differences, the symplectic-form defect of
   a matrix and of one step, the reversibility error of one step, linear stability

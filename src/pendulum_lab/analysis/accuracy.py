@@ -11,9 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ..driver.simulate import Trajectory, simulate, velocity_state
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..simulate import Trajectory, simulate, velocity_state
+from ..model.pendulum import PendulumModel
 
 __all__ = [
     "HIGH_ORDER_DTS",

@@ -2,7 +2,7 @@
 
 Each function returns numbers a test or a notebook can assert on; the
 figures of these results are in :mod:`pendulum_lab.plotting` and their
-Markdown table in :mod:`pendulum_lab.tables`. :func:`compare_methods` is the
+Markdown table in :mod:`pendulum_lab.app.tables`. :func:`compare_methods` is the
 study behind the comparison table of notebook 09 and of ``pendulum-lab
 report``: both call it.
 """
@@ -14,10 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
+from .. import validation as check
+from ..driver.simulate import Trajectory, simulate, velocity_state
 from ..integrators import METHODS, ConvergenceError, get_method
-from ..model import PendulumModel
-from ..simulate import Trajectory, simulate, velocity_state
+from ..model import require_model
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
 from .accuracy import (
     energy_growth,
     final_state_at,
@@ -424,7 +426,7 @@ def compare_methods(problems, methods=tuple(METHODS), *, t_end: float = 200.0,
         if not (isinstance(problem, tuple | list) and len(problem) == 3):
             raise TypeError("`problems` must hold (model, theta0, omega0) triples, got "
                             f"{problem!r}")
-        check.pendulum_model(problem[0])
+        require_model(problem[0])
     from tqdm.auto import tqdm
 
     rows, failures, trajectories = [], [], {}
@@ -482,9 +484,7 @@ class EnergyComparison:
 
         Exact zeros are not drawn (a log axis cannot show them).
         """
-        from ..plotting import plot_energy_comparison
-
-        return plot_energy_comparison(self, ax=ax)
+        return plot_with("plot_energy_comparison", self, ax=ax)
 
 
 def compare_energy(
@@ -514,7 +514,7 @@ def compare_energy(
     -------
     EnergyComparison
     """
-    check.pendulum_model(model)
+    require_model(model)
     return EnergyComparison(
         {
             get_method(m).name: simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=m,

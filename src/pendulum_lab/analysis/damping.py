@@ -23,11 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from ..events import find_crossings, hermite
+from .. import validation as check
+from ..driver.events import find_crossings, hermite
+from ..driver.simulate import Trajectory, simulate
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..simulate import Trajectory, simulate
+from ..model import require_model
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
 from .structure import step_jacobian
 
 __all__ = [
@@ -41,7 +43,7 @@ __all__ = [
 
 
 def _unforced(model: PendulumModel) -> PendulumModel:
-    check.pendulum_model(model)
+    require_model(model)
     if not model.is_autonomous:
         raise ValueError("`model` must have no drive (drive_amplitude = 0): the decay of energy "
                          "is measured on the damped, unforced pendulum")
@@ -214,9 +216,7 @@ class EnergyDecay:
     def plot(self, dt: float | None = None, ax=None):
         """Energy at each turning point over the reference's, at step ``dt`` (the largest by
         default); returns the Figure."""
-        from ..plotting import plot_energy_decay
-
-        return plot_energy_decay(self, dt=dt, ax=ax)
+        return plot_with("plot_energy_decay", self, dt=dt, ax=ax)
 
 
 def energy_decay(

@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
+from .. import validation as check
+from ..driver.simulate import canonical_state
 from ..integrators import GAUSS4_TABLEAU, ButcherTableau
-from ..model import PendulumModel
-from ..simulate import canonical_state
+from ..model.pendulum import PendulumModel
 
 __all__ = ["StageIteration", "stage_contraction"]
 

@@ -11,10 +11,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import expm
 
-from .. import _validation as check
-from ..mechanics import Equilibrium
-from ..model import PendulumModel
-from ..simulate import velocity_state
+from .. import validation as check
+from ..driver.simulate import velocity_state
+from ..model import require_model
+from ..model.pendulum import PendulumModel
+from ..symbolic.mechanics import Equilibrium
 
 __all__ = [
     "equilibrium_angles",
@@ -36,7 +37,7 @@ def find_equilibrium(model: PendulumModel, equilibrium=None) -> Equilibrium:
         A name from ``[eq.name for eq in model.chain.equilibria]`` or one of
         those objects.
     """
-    check.pendulum_model(model)
+    require_model(model)
     if equilibrium is None:
         return model.chain.equilibria[0]
     if isinstance(equilibrium, str):

@@ -2,7 +2,7 @@
 
 The simple pendulum's period is known in closed form (an elliptic integral);
 a simulated period comes from the zero crossings of an angle
-(:func:`pendulum_lab.events.find_crossings`), frequencies from the peaks of a
+(:func:`pendulum_lab.driver.events.find_crossings`), frequencies from the peaks of a
 windowed power spectrum.
 """
 
@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import ellipk
 
-from .. import _validation as check
-from ..events import find_crossings
-from ..model import PendulumModel
-from ..simulate import Trajectory
+from .. import validation as check
+from ..driver.events import find_crossings
+from ..driver.simulate import Trajectory
+from ..model.pendulum import PendulumModel
 
 __all__ = ["dominant_frequencies", "exact_period", "oscillation_period", "spectrum"]
 

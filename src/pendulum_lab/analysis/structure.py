@@ -24,9 +24,10 @@ import math
 
 import numpy as np
 
-from .. import _validation as check
-from ..model import PendulumModel
-from ..simulate import canonical_state, step
+from .. import validation as check
+from ..driver.simulate import canonical_state, step
+from ..model import require_model
+from ..model.pendulum import PendulumModel
 
 __all__ = [
     "amplification",
@@ -205,7 +206,7 @@ def amplification(model: PendulumModel, dts, *, method="glrk4", eps: float = 1e-
     >>> np.round(amplification(unit, [1.0, 3.0], method="leapfrog"), 4)
     array([1.    , 6.8541])
     """
-    check.pendulum_model(model)
+    require_model(model)
     dts = np.atleast_1d(np.asarray(dts, dtype=float))
     rest = np.zeros(model.n)
     factors = [

@@ -29,20 +29,23 @@ embedded in the output. For slides, :func:`save_animation` (and
 ffmpeg binary that the ``imageio-ffmpeg`` package ships), and :func:`still_frame`
 one frame as PNG.
 
-Layout: :mod:`.scene` (the drawing and the frames of a run), :mod:`.simulator`
-(the matplotlib simulator), :mod:`.export` (HTML, GIF, MP4, still PNG).
+Layout: :mod:`pendulum_lab.plotting.scene` (the drawing and the frames of a run, and a still
+PNG), :mod:`.simulator` (the matplotlib simulator), :mod:`.export` (HTML, GIF, MP4).
 """
 
-from ..widgets.controls import SPEEDS, TRAIL
-from .export import (
+from ..plotting.scene import (
     EXPORT_SIZE,
-    MAX_FRAMES,
-    count_frames,
-    html_animation,
-    save_animation,
+    FPS,
+    RUN_COLOURS,
+    TRAIL,
+    PendulumScene,
+    encode_frame,
+    frame_indices,
+    scene_runs,
     still_frame,
 )
-from .scene import FPS, RUN_COLOURS, PendulumScene, encode_frame, frame_indices, scene_runs
+from ..widgets.controls import SPEEDS
+from .export import MAX_FRAMES, count_frames, html_animation, save_animation
 from .simulator import Simulator, simulator
 
 __all__ = [

@@ -4,9 +4,10 @@
 (matplotlib's, the one behind
 :meth:`matplotlib.animation.Animation.to_jshtml`); :func:`save_animation`
 writes an animated GIF (Pillow) or an MP4 (the ffmpeg binary that the
-``imageio-ffmpeg`` package ships); :func:`still_frame` draws one frame. All
-draw the scene of :mod:`.scene`, blitting only the moving artists, and all
-take one run or several runs of a model saved at the same times, overlaid.
+``imageio-ffmpeg`` package ships). Both draw the scene of :mod:`pendulum_lab.plotting.scene`
+(whose :func:`~pendulum_lab.plotting.scene.still_frame` draws one frame), blitting only the
+moving artists, and both take one run or several runs of a model saved at the same times,
+overlaid.
 """
 
 from __future__ import annotations
@@ -16,61 +17,34 @@ import re
 import tempfile
 from pathlib import Path
 
-import matplotlib as mpl
-import numpy as np
 from matplotlib.animation import FFMpegWriter, HTMLWriter, PillowWriter
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 from PIL import Image
 
-from .. import _validation as check
-from .._png import png_bytes
-from ..model import PendulumModel
-from ..simulate import Trajectory
-from ..widgets.controls import TRAIL
-from .scene import FPS, PendulumScene, encode_frame, frame_indices, scene_runs
+from .. import validation as check
+from ..model.pendulum import PendulumModel
+from ..plotting.scene import (
+    FPS,
+    TRAIL,
+    PendulumScene,
+    check_run,
+    encode_frame,
+    export_scene,
+    frame_indices,
+)
 
 __all__ = [
-    "EXPORT_SIZE",
     "MAX_FRAMES",
-    "MIN_TEXT_PIXELS",
     "count_frames",
     "html_animation",
     "save_animation",
-    "still_frame",
 ]
 
 
 #: Default cap on the frames of :func:`html_animation` (each is an embedded PNG).
 MAX_FRAMES = 300
-#: Size of the exported animations' figure [inches].
-EXPORT_SIZE = (9, 3.6)
-#: Smallest height of the exports' text [pixels of the frame]: at a low ``dpi`` the text is
-#: set larger than matplotlib's default so that it stays legible.
-MIN_TEXT_PIXELS = 11
 # matplotlib's player links its button icons from a CDN; an animation must not load anything
 # from outside (JupyterLab and the course website have the icon font already).
 _EXTERNAL_LINK = re.compile(r"<link\b[^>]*\bhref=[\"']https?://[^>]*>\s*", re.IGNORECASE)
-
-
-def _check_run(traj, model) -> Trajectory:
-    """The first of the runs (which fixes the frames' times) once ``traj`` (a trajectory or
-    several, see :func:`~pendulum_lab.animation.scene_runs`) and ``model`` are checked."""
-    check.pendulum_model(model)
-    return scene_runs(traj)[0][0]
-
-
-def _export_scene(
-    traj, model, trail: float, dpi: float, labels=None, animated: bool = True
-) -> tuple[Figure, PendulumScene]:
-    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the runs' scene, its
-    text at least :data:`MIN_TEXT_PIXELS` high."""
-    figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
-    FigureCanvasAgg(figure)
-    size = max(float(mpl.rcParams["font.size"]), MIN_TEXT_PIXELS * 72 / float(dpi))
-    scene = PendulumScene(figure, model, traj, trail, animated=animated, labels=labels,
-                          font_size=size)
-    return figure, scene
 
 
 class _Blitting:
@@ -187,7 +161,7 @@ def html_animation(
     """
     from IPython.display import HTML
 
-    first = _check_run(traj, model)
+    first = check_run(traj, model)
     max_frames = check.integer_at_least("max_frames", max_frames, 1)
     frames = frame_indices(first, fps, speed)
     if len(frames) > max_frames:
@@ -195,7 +169,7 @@ def html_animation(
             f"the animation would have {len(frames)} frames, more than `max_frames` = "
             f"{max_frames}; shorten the run, raise `speed` or lower `fps`"
         )
-    figure, scene = _export_scene(traj, model, trail, dpi, labels)
+    figure, scene = export_scene(traj, model, trail, dpi, labels)
     writer = _BlittingHTMLWriter(
         scene, fps=fps, default_mode="loop", embed_limit=max_frames
     )  # MB: never the binding limit
@@ -291,7 +265,7 @@ def save_animation(
     """
     from matplotlib import rc_context
 
-    first = _check_run(traj, model)
+    first = check_run(traj, model)
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".gif", ".mp4"):
@@ -301,7 +275,7 @@ def save_animation(
         seconds = check.positive_number("seconds", seconds)
         frames = frames[: max(1, round(seconds * fps))]
     settings = {} if suffix == ".gif" else {"animation.ffmpeg_path": _ffmpeg()}
-    figure, scene = _export_scene(traj, model, trail, dpi, labels)
+    figure, scene = export_scene(traj, model, trail, dpi, labels)
     if suffix == ".gif":
         writer = _BlittingGIFWriter(scene, fps=fps)
     else:
@@ -311,55 +285,3 @@ def save_animation(
             scene.show(index)
             writer.grab_frame()
     return path
-
-
-def still_frame(
-    traj,
-    model: PendulumModel,
-    *,
-    index: int | None = None,
-    trail: float = TRAIL,
-    dpi: float = 80,
-    labels=None,
-) -> bytes:
-    """One frame of a run's animation as a PNG: by default the last, with the whole run's energies.
-
-    The drawing of :func:`html_animation` and :func:`save_animation` (chain,
-    trail, kinetic, potential and total energy up to that state, the time
-    and energies written above), for a page that cannot play anything: the
-    browser-drawn :func:`pendulum_lab.widgets.live_simulator` shows it where
-    no kernel runs.
-
-    Parameters
-    ----------
-    traj : Trajectory or sequence of Trajectory
-        A single trajectory of ``model``, or several saved at the same times.
-    model : PendulumModel
-    index : int, optional
-        The saved state shown, ``0 <= index < len(traj.t)``; default the last.
-    trail : float
-        Trail length [s].
-    dpi : float
-        Resolution; the figure is 9 x 3.6 inches.
-    labels : sequence of str, optional
-        Names of the runs in the legend when there are several.
-
-    Returns
-    -------
-    bytes
-        The PNG file's bytes.
-
-    Examples
-    --------
-    >>> import pendulum_lab as pl
-    >>> sp_ = pl.simple_pendulum()
-    >>> traj = pl.simulate(sp_, [1.0], [0.0], t_end=1.0, dt=0.01)
-    >>> still_frame(traj, sp_, dpi=40)[:8]
-    b'\\x89PNG\\r\\n\\x1a\\n'
-    """
-    last = len(_check_run(traj, model).t) - 1
-    index = last if index is None else check.index_below("index", index, last + 1)
-    figure, scene = _export_scene(traj, model, trail, dpi, labels, animated=False)
-    scene.show(index)
-    figure.canvas.draw()
-    return png_bytes(np.asarray(figure.canvas.buffer_rgba()))

@@ -7,19 +7,18 @@ from pathlib import Path
 import ipywidgets as widgets
 import numpy as np
 
-from ..model import PendulumModel
+from ..model.pendulum import PendulumModel
+from ..plotting.scene import FPS, TRAIL, PendulumScene, encode_frame, frame_indices
 from ..widgets.calls import SimulateCall
 from ..widgets.controls import (
     SIMULATOR_T_END,
     SPEEDS,
-    TRAIL,
     build_simulator,
     call_from_controls,
     pendulum_controls,
 )
 from ..widgets.instrument import Instrument
 from .export import html_animation, save_animation
-from .scene import FPS, PendulumScene, encode_frame, frame_indices
 
 __all__ = ["Simulator", "simulator"]
 

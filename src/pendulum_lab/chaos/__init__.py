@@ -28,7 +28,7 @@ module:
 Every trajectory comes from :func:`pendulum_lab.simulate` (an ensemble is a
 batch of initial states) or, for runs examined piece by piece, from
 :func:`pendulum_lab.simulate_segments`; crossings are located by
-:mod:`pendulum_lab.events`. Nothing here steps the equations of motion
+:mod:`pendulum_lab.driver.events`. Nothing here steps the equations of motion
 itself. The figures of these results are in :mod:`pendulum_lab.plotting`.
 
 Notes

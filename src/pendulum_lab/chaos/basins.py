@@ -21,12 +21,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from .._angles import wrap_angle
-from ..cluster import check_client, map_members, members_of, portable_method
+from .. import validation as check
+from ..driver.cluster import check_client, map_members, members_of, portable_method
+from ..driver.segments import default_segment_steps
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..segments import default_segment_steps
+from ..model import require_model
+from ..model.angles import wrap_angle
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
 from .stroboscopic import PERIOD_TOLERANCE, drive_period, orbit_periods, stroboscopic_section
 
 __all__ = ["Basins", "basin_samples", "basins_of_attraction"]
@@ -79,9 +81,7 @@ class Basins:
 
     def plot(self, ax=None, **kwargs):
         """The basins in the ``(theta0, omega0)`` plane with the attractors' points."""
-        from ..plotting import plot_basins
-
-        return plot_basins(self, ax=ax, **kwargs)
+        return plot_with("plot_basins", self, ax=ax, **kwargs)
 
 
 def basins_of_attraction(
@@ -115,7 +115,7 @@ def basins_of_attraction(
         ``tolerance`` of one of the attractor's points.
     client : dask.distributed.Client, optional
         Integrate the grid's starts on this Dask cluster, in chunks
-        (:func:`pendulum_lab.cluster.map_members`); the basins are the same,
+        (:func:`pendulum_lab.driver.cluster.map_members`); the basins are the same,
         bit for bit, as without it.
     chunk_size : int, optional
         Starts per chunk on a cluster (by default a few chunks per worker).
@@ -133,7 +133,7 @@ def basins_of_attraction(
     >>> basins.periods, basins.label.tolist()  # one period-1 attractor takes them all
     ((1,), [[0, 0, 0]])
     """
-    check.pendulum_model(model)
+    require_model(model)
     if model.n != 1:
         raise ValueError(f"`model` must have one link (basins are drawn in its (theta, omega) "
                          f"plane), got n = {model.n}")
@@ -191,7 +191,7 @@ def basin_samples(theta0, omega0, rows, model: PendulumModel, n_periods: int,
     The work of :func:`basins_of_attraction` (arguments validated there) on
     starts ``theta0, omega0`` of shape ``(K, 1)``, rows ``rows`` of the
     flattened grid (a family's members are taken there), here or on a Dask
-    worker (:func:`pendulum_lab.cluster.map_members`).
+    worker (:func:`pendulum_lab.driver.cluster.map_members`).
 
     Returns
     -------

@@ -5,7 +5,7 @@ attractor's stroboscopic points are plotted above that value: one point for a
 period-1 response, two after a period doubling, a cloud for a strange
 attractor [BG]_. All values, and several initial states per value (attractors
 coexist), are integrated as ONE ensemble run: the model is a
-:class:`~pendulum_lab.family.ModelFamily`, one member per value, and the
+:class:`~pendulum_lab.model.ModelFamily`, one member per value, and the
 compiled loop gives each member its own parameters. The periods are
 detected from the computed samples (:func:`~pendulum_lab.chaos.orbit_periods`),
 and so are the period doublings (:meth:`BifurcationDiagram.doublings`).
@@ -26,13 +26,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from .._angles import wrap_angle
-from ..cluster import check_client, map_members, portable_method
-from ..family import FAMILY_PARAMETERS
+from .. import validation as check
+from ..driver.cluster import check_client, map_members, portable_method
+from ..driver.segments import default_segment_steps
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..segments import default_segment_steps
+from ..model import FAMILY_PARAMETERS, require_model
+from ..model.angles import wrap_angle
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
 from .stroboscopic import PERIOD_TOLERANCE, orbit_periods, stroboscopic_section
 
 __all__ = [
@@ -191,10 +192,8 @@ class BifurcationDiagram:
         :class:`~pendulum_lab.chaos.LyapunovEstimate` over the same values
         (ensemble shape ``(V,)`` or ``(V, B)``). Returns the Figure.
         """
-        from ..plotting import plot_bifurcation
-
-        return plot_bifurcation(self, ax=ax, lyapunov=lyapunov, mark_doublings=mark_doublings,
-                                **kwargs)
+        return plot_with("plot_bifurcation", self, ax=ax, lyapunov=lyapunov,
+                         mark_doublings=mark_doublings, **kwargs)
 
 
 def _starts(model, theta0, omega0):
@@ -264,7 +263,7 @@ def bifurcation_diagram(
 
     Every value of ``parameter`` and every initial state make one member of
     a single ensemble run (:func:`~pendulum_lab.chaos.stroboscopic_section` of
-    the :class:`~pendulum_lab.family.ModelFamily` ``model.family(parameter=values)``),
+    the :class:`~pendulum_lab.model.ModelFamily` ``model.family(parameter=values)``),
     with a progress bar for long runs. A diagram over ``"drive_frequency"``
     rescales each member's time to the model's own drive period (exactly:
     the steps are the same), so it too is one run.
@@ -291,7 +290,7 @@ def bifurcation_diagram(
     progress : bool, optional
     client : dask.distributed.Client, optional
         Integrate the values on this Dask cluster, in chunks
-        (:func:`pendulum_lab.cluster.map_members`); the diagram is the same,
+        (:func:`pendulum_lab.driver.cluster.map_members`); the diagram is the same,
         bit for bit, as without it.
     chunk_size : int, optional
         Values per chunk on a cluster (by default a few chunks per worker).
@@ -309,7 +308,7 @@ def bifurcation_diagram(
     >>> diagram.periods.tolist()  # period 1, then period 2 past the first doubling
     [[1], [2]]
     """
-    check.pendulum_model(model)
+    require_model(model)
     parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
     values = check.real_sequence("values", values)
     variable = check.choice("variable", variable, ("omega", "theta"))
@@ -354,7 +353,7 @@ def bifurcation_samples(rows, family, ratio, theta0, omega0, n_periods: int,
 
     The work of :func:`bifurcation_diagram` (arguments validated there) on
     the members ``rows`` of ``family`` (time rescaled by ``ratio``), here or
-    on a Dask worker (:func:`pendulum_lab.cluster.map_members`).
+    on a Dask worker (:func:`pendulum_lab.driver.cluster.map_members`).
 
     Returns
     -------

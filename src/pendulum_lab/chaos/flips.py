@@ -12,14 +12,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from ..cluster import check_client, map_members, portable_method
-from ..events import find_crossings
+from .. import validation as check
+from ..driver.cluster import check_client, map_members, portable_method
+from ..driver.events import find_crossings
+from ..driver.segments import simulate_segments
+from ..driver.simulate import progress_bar, step_count, time_grid
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..segments import simulate_segments
-from ..simulate import progress_bar, step_count, time_grid
-from ._common import require_finite
+from ..model import require_double_pendulum, require_model
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
+from .common import require_finite
 
 __all__ = ["FlipMap", "can_flip", "flip_time_map", "flip_times"]
 
@@ -68,7 +70,7 @@ def can_flip(model: PendulumModel, theta, omega=None) -> np.ndarray:
     >>> can_flip(dp, [[0.5, 0.5], [2.0, 2.5]]).tolist()
     [False, True]
     """
-    check.pendulum_model(model)
+    require_model(model)
     theta = check.state_array("theta", theta, model.n)
     omega = np.zeros_like(theta) if omega is None else check.state_array("omega", omega, model.n)
     energy = model.energy(theta, omega)
@@ -115,9 +117,7 @@ class FlipMap:
         Energy-forbidden cells are grey, cells that did not flip before
         ``t_end`` white.
         """
-        from ..plotting import plot_flip_map
-
-        return plot_flip_map(self, ax=ax, colorbar=colorbar)
+        return plot_with("plot_flip_map", self, ax=ax, colorbar=colorbar)
 
 
 def _symmetric_grid(size: int, half_width: float) -> np.ndarray:
@@ -167,7 +167,7 @@ def flip_time_map(
     progress : bool, optional
     client : dask.distributed.Client, optional
         Integrate the cells on this Dask cluster, in chunks
-        (:func:`pendulum_lab.cluster.map_members`); the map is the same, bit
+        (:func:`pendulum_lab.driver.cluster.map_members`); the map is the same, bit
         for bit, as without it.
     chunk_size : int, optional
         Cells per chunk on a cluster (by default a few chunks per worker).
@@ -194,7 +194,7 @@ def flip_time_map(
     >>> fm.time.shape, bool(fm.forbidden[2:4, 2:4].all())
     ((6, 6), True)
     """
-    check.double_pendulum(model)
+    require_double_pendulum(model)
     n1, n2 = (size, size) if np.ndim(size) == 0 else tuple(size)
     n1 = check.integer_at_least("size", n1, 1)
     n2 = check.integer_at_least("size", n2, 1)
@@ -229,7 +229,7 @@ def flip_times(theta, model: PendulumModel, t_end: float, dt: float, method,
     """Flip time of each state released at rest, ``inf`` if none before ``t_end``.
 
     The work of :func:`flip_time_map` on a batch of cells, here or on a Dask
-    worker (:func:`pendulum_lab.cluster.map_members`). The cells are
+    worker (:func:`pendulum_lab.driver.cluster.map_members`). The cells are
     integrated in blocks of at most ``BLOCK_CELLS``; each cell's time is the
     same in any block.
 

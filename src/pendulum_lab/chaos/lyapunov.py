@@ -30,14 +30,16 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import _validation as check
-from ..cluster import check_client, map_members, members_of, portable_method
-from ..events import hermite
+from .. import validation as check
+from ..driver.cluster import check_client, map_members, members_of, portable_method
+from ..driver.events import hermite
+from ..driver.segments import segment_length, simulate_segments
+from ..driver.simulate import Trajectory, canonical_state, time_grid
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..segments import segment_length, simulate_segments
-from ..simulate import Trajectory, canonical_state, time_grid
-from ._common import phase_distance, require_finite, scalar_or_array, unit_direction
+from ..model import require_double_pendulum, require_model
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
+from .common import phase_distance, require_finite, scalar_or_array, unit_direction
 from .sections import section_spread
 from .separation import perturbed
 
@@ -101,9 +103,7 @@ class LyapunovEstimate:
 
         For an ensemble, one line per member.
         """
-        from ..plotting import plot_lyapunov
-
-        return plot_lyapunov(self, ax=ax, label=label, **kwargs)
+        return plot_with("plot_lyapunov", self, ax=ax, label=label, **kwargs)
 
 
 def _prepare(model, theta0, omega0, p0, t_end, dt, name: str, interval):
@@ -185,7 +185,7 @@ def lyapunov_benettin(
         member of an ensemble).
     client : dask.distributed.Client, optional
         Integrate an ensemble (a Lyapunov map) on this Dask cluster, in
-        chunks of members (:func:`pendulum_lab.cluster.map_members`); the
+        chunks of members (:func:`pendulum_lab.driver.cluster.map_members`); the
         estimates are the same, bit for bit, as without it.
     chunk_size : int, optional
         Members per chunk on a cluster (by default a few chunks per worker).
@@ -236,7 +236,7 @@ def benettin_running(theta0, p0, rows, model: PendulumModel, dt: float, every: i
     The work of :func:`lyapunov_benettin` (arguments validated there) on
     states ``theta0, p0`` of shape ``(K, n)``, rows ``rows`` of the whole
     flattened batch (a family's members are taken there), here or on a Dask
-    worker (:func:`pendulum_lab.cluster.map_members`).
+    worker (:func:`pendulum_lab.driver.cluster.map_members`).
     """
     model = members_of(model, rows)
     members = len(theta0)
@@ -351,7 +351,7 @@ def tangent_running(theta0, p0, rows, model: PendulumModel, dt: float, every: in
     The work of :func:`lyapunov_variational` and :func:`lyapunov_spectrum`
     (arguments validated there) on states ``theta0, p0`` of shape ``(K, n)``,
     rows ``rows`` of the whole flattened batch (a family's members are taken
-    there), here or on a Dask worker (:func:`pendulum_lab.cluster.map_members`).
+    there), here or on a Dask worker (:func:`pendulum_lab.driver.cluster.map_members`).
     The tangent vectors ``directions`` (shape ``(2n, k)``) are carried along;
     every ``every`` steps the propagated vectors are re-orthonormalised by a QR
     factorisation, ``V = Q R``, and ``log |R_ii|`` is the growth of the
@@ -409,7 +409,7 @@ def lyapunov_variational(
 
     where ``A_1``, ``A_2`` are the Jacobians at the two Gauss points
     ``t_k + (1/2 -+ sqrt(3)/6) dt`` (the state there from cubic Hermite
-    interpolation between the saved steps, :func:`pendulum_lab.events.hermite`,
+    interpolation between the saved steps, :func:`pendulum_lab.driver.events.hermite`,
     accurate to ``O(dt^4)``). The exponential is split as
     ``exp(tr W / 2n) exp(W0)``, ``W0 = W - (tr W / 2n) I``: the scalar factor
     is exact, and ``exp(W0)`` is replaced by its (2,2) Pade approximant
@@ -432,7 +432,7 @@ def lyapunov_variational(
     Parameters
     ----------
     model : PendulumModel
-        Or a :class:`~pendulum_lab.family.ModelFamily` (one estimate per member).
+        Or a :class:`~pendulum_lab.model.ModelFamily` (one estimate per member).
     theta0, omega0, p0 : array_like, shape (..., n)
     t_end, dt, method, t0, progress
         As for :func:`~pendulum_lab.simulate`; the estimate uses
@@ -444,7 +444,7 @@ def lyapunov_variational(
         :func:`lyapunov_benettin` with the same seed).
     client : dask.distributed.Client, optional
         Integrate an ensemble (a Lyapunov map) on this Dask cluster, in
-        chunks of members (:func:`pendulum_lab.cluster.map_members`); the
+        chunks of members (:func:`pendulum_lab.driver.cluster.map_members`); the
         estimates are the same, bit for bit, as without it.
     chunk_size : int, optional
         Members per chunk on a cluster (by default a few chunks per worker).
@@ -471,7 +471,7 @@ def lyapunov_variational(
     >>> bool(est.exponent > 0.5)
     True
     """
-    check.pendulum_model(model)
+    require_model(model)
     t, running, name, dt, seconds = _tangent_growth(
         model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
         t0=t0, progress=progress, directions=unit_direction(2 * model.n, seed)[:, None],
@@ -521,9 +521,7 @@ class LyapunovSpectrum:
 
     def plot(self, ax=None, **kwargs):
         """Running estimates of every exponent against time; returns the Figure."""
-        from ..plotting import plot_lyapunov_spectrum
-
-        return plot_lyapunov_spectrum(self, ax=ax, **kwargs)
+        return plot_with("plot_lyapunov_spectrum", self, ax=ax, **kwargs)
 
 
 def lyapunov_spectrum(
@@ -563,7 +561,7 @@ def lyapunov_spectrum(
     Parameters
     ----------
     model : PendulumModel
-        Or a :class:`~pendulum_lab.family.ModelFamily` (one spectrum per member).
+        Or a :class:`~pendulum_lab.model.ModelFamily` (one spectrum per member).
     theta0, omega0, p0 : array_like, shape (..., n)
     t_end, dt, method, t0, progress
         As for :func:`~pendulum_lab.simulate`; the estimate uses
@@ -572,7 +570,7 @@ def lyapunov_spectrum(
         Steps between re-orthonormalisations (and recorded estimates), ``>= 1``.
     client : dask.distributed.Client, optional
         Integrate an ensemble on this Dask cluster, in chunks of members
-        (:func:`pendulum_lab.cluster.map_members`); the spectra are the same,
+        (:func:`pendulum_lab.driver.cluster.map_members`); the spectra are the same,
         bit for bit, as without it.
     chunk_size : int, optional
         Members per chunk on a cluster (by default a few chunks per worker).
@@ -601,7 +599,7 @@ def lyapunov_spectrum(
     >>> round(spectrum.sum, 12)  # -damping / (m l^2)
     -0.5
     """
-    check.pendulum_model(model)
+    require_model(model)
     t, running, name, dt, seconds = _tangent_growth(
         model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
         t0=t0, progress=progress, directions=np.eye(2 * model.n), label="spectrum",
@@ -671,9 +669,7 @@ class EnergyLyapunov:
 
     def plot(self, ax=None):
         """Exponent against energy: every orbit, and the mean over the chaotic ones."""
-        from ..plotting import plot_lyapunov_energy
-
-        return plot_lyapunov_energy(self, ax=ax)
+        return plot_with("plot_lyapunov_energy", self, ax=ax)
 
 
 def lyapunov_by_energy(
@@ -725,7 +721,7 @@ def lyapunov_by_energy(
     >>> [(row.energy, row.chaotic) for row in scan.per_energy()]
     [(-20.0, 0), (16.0, 2)]
     """
-    check.double_pendulum(model)
+    require_double_pendulum(model)
     energies = np.array([check.real_number("energies", e) for e in np.atleast_1d(energies)])
     lowest = float(model.potential_energy(np.zeros(2)))
     if energies.size == 0 or np.any(energies <= lowest):

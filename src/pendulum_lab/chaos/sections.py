@@ -2,7 +2,7 @@
 
 A crossing is detected between two saved steps and then landed on the
 surface in one of two ways (``landing`` of :func:`poincare_section`): Newton's
-method on the length of one extra step in time (:func:`pendulum_lab.events.land`),
+method on the length of one extra step in time (:func:`pendulum_lab.driver.events.land`),
 or Henon's trick, one step with the angle as the independent variable
 (:func:`pendulum_lab.henon_step`). :func:`landing_errors` measures how far
 either lands from the exact crossing.
@@ -20,15 +20,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from .._angles import wrap_angle
-from ..events import check_direction, find_crossings, land
-from ..henon import henon_step
+from .. import validation as check
+from ..driver.events import check_direction, find_crossings, land
+from ..driver.henon import henon_step
+from ..driver.segments import simulate_segments
+from ..driver.simulate import canonical_state, step
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..segments import simulate_segments
-from ..simulate import canonical_state, step
-from ._common import phase_distance, require_finite
+from ..model import require_double_pendulum, require_model
+from ..model.angles import wrap_angle
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
+from .common import phase_distance, require_finite
 
 __all__ = [
     "LANDINGS",
@@ -100,7 +102,7 @@ def section_states(
     >>> bool(np.allclose(dp.energy(theta0, omega0), -15.0)), bool(np.all(omega0[:, 0] > 0))
     (True, True)
     """
-    check.pendulum_model(model)
+    require_model(model)
     n = model.n
     if n < 2:
         raise ValueError("`model` must have at least two links for a Poincare section")
@@ -186,9 +188,7 @@ class PoincareSection:
 
     def plot(self, ax=None, link: int | None = None, s: float = 2.0, **kwargs):
         """The section in ``(theta_j, p_j)``, one colour per orbit; returns the Figure."""
-        from ..plotting import plot_section
-
-        return plot_section(self, ax=ax, link=link, s=s, **kwargs)
+        return plot_with("plot_section", self, ax=ax, link=link, s=s, **kwargs)
 
 
 
@@ -212,7 +212,7 @@ def poincare_section(
     The ensemble runs in segments (:func:`~pendulum_lab.simulate_segments`)
     with every step kept; a crossing is a step over which the unwrapped angle
     passes ``value + 2 pi m``, upwards for ``direction = 1``
-    (:func:`pendulum_lab.events.find_crossings` with period ``2 pi``). Each
+    (:func:`pendulum_lab.driver.events.find_crossings` with period ``2 pi``). Each
     crossing, between saved steps ``k`` and ``k+1``, is then put on the
     surface by one of two landings, both with the same integrator and both
     starting from step ``k``:
@@ -222,7 +222,7 @@ def poincare_section(
         ``dH/dp_link`` at both steps) gives a first guess ``tau`` of the
         crossing time after ``t_k``; Newton's method on ``tau``, each iterate
         one step of length ``tau`` (:func:`~pendulum_lab.step`), drives
-        ``theta_link`` onto the surface (:func:`pendulum_lab.events.land`).
+        ``theta_link`` onto the surface (:func:`pendulum_lab.driver.events.land`).
         A root solve in time: a few steps per crossing.
     ``"henon"``
         Henon's trick (1982): one step of the integrator with ``theta_link``
@@ -284,7 +284,7 @@ def poincare_section(
     >>> bool(np.max(np.abs(sec.p - henon.p)) < 1e-8), set(henon.landing_steps.tolist())
     (True, {1})
     """
-    check.pendulum_model(model)
+    require_model(model)
     n = model.n
     link = check.index_below("link", link, n)
     value = check.real_number("value", value)
@@ -408,9 +408,7 @@ class LandingErrors:
 
     def plot(self, ax=None, **kwargs):
         """The error against the crossing speed (log-log); returns the Figure."""
-        from ..plotting import plot_landing_errors
-
-        return plot_landing_errors(self, ax=ax, **kwargs)
+        return plot_with("plot_landing_errors", self, ax=ax, **kwargs)
 
 
 def landing_errors(
@@ -467,7 +465,7 @@ def landing_errors(
     >>> bool(16 < coarse.state_error.max() / fine.state_error.max() < 64)  # about 2**5
     True
     """
-    check.pendulum_model(model)
+    require_model(model)
     landing = check.choice("landing", landing, ("newton", "henon"))
     dt = check.positive_number("dt", dt)
     lead = check.number_in("lead", lead, 0.0, 1.0, open_low=True)
@@ -531,7 +529,7 @@ def energy_sections(
         ``{energy: PoincareSection}``; each section's ``orbit`` numbers its
         own orbits from 0.
     """
-    check.double_pendulum(model)
+    require_double_pendulum(model)
     orbits = check.integer_at_least("orbits", orbits, 2)
     energies = [check.real_number("energies", e) for e in np.atleast_1d(energies)]
     starts, owner = [], []
@@ -582,7 +580,7 @@ def section_spread(model: PendulumModel, energy: float, orbits: int = 10
     >>> theta0.shape, bool(np.allclose(dp.energy(theta0, omega0), 5.0))
     ((6, 2), True)
     """
-    check.double_pendulum(model)
+    require_double_pendulum(model)
     energy = check.real_number("energy", energy)
     orbits = check.integer_at_least("orbits", orbits, 2)
     return _spread(model, energy, orbits, "energy")

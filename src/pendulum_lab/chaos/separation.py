@@ -6,10 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from ..model import PendulumModel
-from ..simulate import Trajectory, canonical_state, simulate
-from ._common import phase_distance, unit_direction
+from .. import validation as check
+from ..driver.simulate import Trajectory, canonical_state, simulate
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
+from .common import phase_distance, unit_direction
 
 __all__ = ["Separation", "perturbed", "separation", "separation_between"]
 
@@ -38,9 +39,7 @@ class Separation:
 
     def plot(self, ax=None, label=None, **kwargs):
         """Distance against time on a log scale; returns the Figure."""
-        from ..plotting import plot_separation
-
-        return plot_separation(self, ax=ax, label=label, **kwargs)
+        return plot_with("plot_separation", self, ax=ax, label=label, **kwargs)
 
 
 def perturbed(theta, p, delta: float, seed) -> tuple[np.ndarray, np.ndarray]:

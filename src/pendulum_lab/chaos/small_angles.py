@@ -6,11 +6,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
+from .. import validation as check
 from ..analysis.linearization import linearized_solution
-from ..model import PendulumModel
-from ..simulate import simulate, velocity_state
-from ._common import scalar_or_array
+from ..driver.simulate import simulate, velocity_state
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
+from .common import scalar_or_array
 
 __all__ = ["SmallAngleComparison", "small_angle_comparison"]
 
@@ -42,9 +43,7 @@ class SmallAngleComparison:
 
     def plot(self, ax=None, member=()):
         """Both motions of one ensemble member (index ``member``); returns the Figure."""
-        from ..plotting import plot_small_angle
-
-        return plot_small_angle(self, ax=ax, member=member)
+        return plot_with("plot_small_angle", self, ax=ax, member=member)
 
     def plot_parting(self, amplitudes, ax=None):
         """Parting time against release amplitude (log-log) with a fitted power law.
@@ -58,9 +57,7 @@ class SmallAngleComparison:
         -------
         matplotlib.figure.Figure
         """
-        from ..plotting import plot_parting
-
-        return plot_parting(self, amplitudes, ax=ax)
+        return plot_with("plot_parting", self, amplitudes, ax=ax)
 
 
 def small_angle_comparison(

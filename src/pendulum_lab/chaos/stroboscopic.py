@@ -19,11 +19,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from .._angles import wrap_angle
-from ..model import PendulumModel
-from ..segments import simulate_segments
-from ._common import require_finite
+from .. import validation as check
+from ..driver.segments import simulate_segments
+from ..model import require_model
+from ..model.angles import wrap_angle
+from ..model.pendulum import PendulumModel
+from ..plot_dispatch import plot_with
+from .common import require_finite
 
 __all__ = ["StroboscopicSection", "drive_period", "orbit_periods", "stroboscopic_section"]
 
@@ -41,7 +43,7 @@ def drive_period(model: PendulumModel) -> float:
         If ``model`` has no drive frequency, or a family's members have
         different drive periods.
     """
-    check.pendulum_model(model)
+    require_model(model)
     period = model.drive_period
     if period is None:
         raise ValueError("`model` has no drive (its `drive_frequency` is None): a stroboscopic "
@@ -140,9 +142,7 @@ class StroboscopicSection:
 
     def plot(self, ax=None, link: int = 0, member=None, **kwargs):
         """The samples in the ``(theta, omega)`` plane of ``link``; returns the Figure."""
-        from ..plotting import plot_stroboscopic
-
-        return plot_stroboscopic(self, ax=ax, link=link, member=member, **kwargs)
+        return plot_with("plot_stroboscopic", self, ax=ax, link=link, member=member, **kwargs)
 
 
 def stroboscopic_section(
@@ -170,7 +170,7 @@ def stroboscopic_section(
     ----------
     model : PendulumModel
         A model with a drive frequency; or a
-        :class:`~pendulum_lab.family.ModelFamily` sharing one drive period.
+        :class:`~pendulum_lab.model.ModelFamily` sharing one drive period.
     theta0, omega0, p0 : array_like, shape (n,) or (..., n)
         The initial state, as for :func:`~pendulum_lab.simulate`.
     n_periods : int

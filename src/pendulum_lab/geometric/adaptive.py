@@ -42,12 +42,12 @@ import time
 import numpy as np
 import sympy as sp
 
-from .. import _validation as check
+from .. import validation as check
 from ..analysis import AdaptiveRun, finite_difference_jacobian, symplectic_form_defect
-from ..mechanics import derive_chain
-from ..model import PendulumModel
-from ..simulate import step
-from ._checks import conservative_model
+from ..driver.simulate import step
+from ..model.pendulum import PendulumModel
+from ..symbolic.mechanics import derive_chain
+from .model_checks import conservative_model
 
 __all__ = [
     "naive_adaptive_leapfrog",

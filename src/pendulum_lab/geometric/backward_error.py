@@ -30,14 +30,14 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from .. import _validation as check
+from .. import validation as check
 from ..analysis import exact_period
+from ..driver.simulate import simulate
 from ..integrators import get_method
-from ..mechanics import derive_chain, is_identically_zero
-from ..model import PendulumModel
-from ..simulate import simulate
-from ._checks import conservative_model
+from ..model.pendulum import PendulumModel
+from ..symbolic.mechanics import derive_chain, is_identically_zero
 from .long_time import exact_libration
+from .model_checks import conservative_model
 from .modified_equations import (
     STEP_SIZE,
     abstract_problem,

@@ -24,12 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipj, ellipk
 
-from .. import _validation as check
+from .. import validation as check
 from ..analysis import exact_period
+from ..driver.simulate import simulate
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..simulate import simulate
-from ._checks import simple_pendulum_model
+from ..model.pendulum import PendulumModel
+from .model_checks import simple_pendulum_model
 
 __all__ = ["ErrorGrowth", "exact_libration", "global_error_growth"]
 

@@ -50,7 +50,7 @@ import math
 
 import sympy as sp
 
-from .. import _validation as check
+from .. import validation as check
 
 __all__ = [
     "SERIES_METHODS",

@@ -34,12 +34,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _validation as check
-from .._validation import pendulum_model as check_model
+from .. import validation as check
 from ..analysis import step_jacobian, symplectic_form_defect
+from ..driver.simulate import simulate
 from ..integrators import get_method
-from ..model import PendulumModel
-from ..simulate import simulate
+from ..model import require_model
+from ..model.pendulum import PendulumModel
 
 __all__ = [
     "LoopAreas",
@@ -219,7 +219,7 @@ def carried_loop_areas(model: PendulumModel, method, center, axes, *, t_end: flo
     >>> bool(abs(areas.ratio[-1] - 1) < 1e-10)
     True
     """
-    model = check_model(model)
+    model = require_model(model)
     tol = check.positive_number("tol", tol)
     points = check.integer_at_least("min_points", min_points, 8)
     max_points = check.integer_at_least("max_points", max_points, 2 * points)
@@ -271,7 +271,7 @@ def jacobian_properties(model: PendulumModel, method, theta, p, dt: float) -> tu
     >>> round(det, 6)          # 1 + h^2 g / l cos(0)
     1.0981
     """
-    model = check_model(model)
+    model = require_model(model)
     jac = step_jacobian(model, theta, p0=p, dt=dt, method=method)
     return float(np.linalg.det(jac)), symplectic_form_defect(jac)
 
@@ -297,7 +297,7 @@ def jacobian_along_orbit(model: PendulumModel, method, theta0, p0, *, dt: float,
     >>> bool(np.all(np.abs(det - 1) < 1e-8))
     True
     """
-    model = check_model(model)
+    model = require_model(model)
     steps = check.integer_at_least("steps", steps, 1)
     run = simulate(model, theta0, p0=p0, t_end=steps * dt, dt=dt, method=method,
                    progress=False)

@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .. import _validation as check
-from ..model import PendulumModel
-from ._checks import simple_pendulum_model
+from .. import validation as check
+from ..model.pendulum import PendulumModel
+from .model_checks import simple_pendulum_model
 
 __all__ = [
     "GREENE_K",

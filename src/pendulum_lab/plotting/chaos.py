@@ -15,7 +15,7 @@ from matplotlib.colors import ListedColormap, LogNorm
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from .. import _validation as check
+from .. import validation as check
 from .figures import axis_label, get_axes, new_figure, subscript
 
 __all__ = [

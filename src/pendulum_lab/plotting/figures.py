@@ -18,10 +18,10 @@ from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
-from .. import _validation as check
-from .._angles import wrap_angle
-from ..model import PendulumModel
-from ..simulate import Trajectory
+from .. import validation as check
+from ..driver.simulate import Trajectory
+from ..model.angles import wrap_angle
+from ..model.pendulum import PendulumModel
 
 __all__ = [
     "KINETIC",

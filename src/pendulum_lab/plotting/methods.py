@@ -10,7 +10,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .. import _validation as check
+from .. import validation as check
 from ..analysis import AdaptiveRun, EnergyComparison, OrderResult
 from .figures import axis_label, get_axes, pendulum_name
 

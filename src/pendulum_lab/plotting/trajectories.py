@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .. import _validation as check
+from .. import validation as check
 from ..analysis import (
     equilibrium_angles,
     exact_period,
@@ -26,8 +26,8 @@ from ..analysis import (
     normal_modes,
 )
 from ..analysis import spectrum as power_spectrum
-from ..model import PendulumModel
-from ..simulate import Trajectory
+from ..driver.simulate import Trajectory
+from ..model.pendulum import PendulumModel
 
 if TYPE_CHECKING:  # geometric imports plotting's neighbours; only the type is needed here
     from ..geometric import ModifiedEnergy

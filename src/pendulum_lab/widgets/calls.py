@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..driver.simulate import Trajectory, simulate
 from ..model import PendulumModel
-from ..simulate import Trajectory, simulate
 
 __all__ = ["SimulateCall", "model_code", "numbers"]
 

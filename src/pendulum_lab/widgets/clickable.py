@@ -43,10 +43,11 @@ import traitlets
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .. import _validation as check
 from .. import chaos, plotting
-from .._png import png_bytes
-from ..model import PendulumModel
+from .. import validation as check
+from ..model import require_model
+from ..model.pendulum import PendulumModel
+from ..plotting.png import png_bytes
 from .calls import SimulateCall, model_code
 from .channel import STATIC, ReplayWidget, float32_buffer
 from .controls import (
@@ -338,7 +339,7 @@ def section_reach(model: PendulumModel, energy: float, theta2) -> np.ndarray:
     >>> float(section_reach(dp, -20.0, 0.0) ** 2 / 2)   # M_22 = 1: the energy above V(0, 0)
     9.43
     """
-    check.pendulum_model(model)
+    require_model(model)
     energy = check.real_number("energy", energy)
     theta2 = np.asarray(theta2, dtype=float)
     theta = np.stack([np.zeros_like(theta2), theta2], axis=-1)
@@ -484,7 +485,7 @@ def section_explorer(
     >>> len(ex.orbits), ex.message.startswith("No orbit launched")
     (1, True)
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     if model.n != 2:
         raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
     if not energy_is_conserved(model):
@@ -587,7 +588,7 @@ def portrait_explorer(
     >>> bool(ex.omega_max > 9.5 and ex.orbits[0].points[:, 0].min() > -3.1416)
     True
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     if model.n != 1:
         raise ValueError(f"`model` must be a simple pendulum (n = 1), got n = {model.n}")
     return PortraitExplorer(model, t_end, dt, method)

@@ -13,8 +13,8 @@ masses, lengths and ``g``, and its damping and drive stay as they are
 (:func:`model_from_controls`). The method dropdown offers the methods
 :func:`pendulum_lab.simulate` accepts for that model
 (:func:`pendulum_lab.integrators.suitable_methods`, the rule the driver
-applies), and a method it refuses is refused here with the driver's reason
-(:func:`check_method`).
+applies), and a method it refuses is refused here by the driver's own check,
+with its reason (:func:`check_method`).
 """
 
 from __future__ import annotations
@@ -25,11 +25,12 @@ from collections.abc import Sequence
 import ipywidgets as widgets
 import numpy as np
 
-from .. import _validation as check
-from ..integrators import METHODS, get_method, suitable_methods, unsuitability
-from ..model import PendulumModel
+from .. import validation as check
+from ..driver.simulate import Trajectory, check_method_fits, hamiltonian_field, step_count
+from ..integrators import METHODS, get_method, suitable_methods
+from ..model import require_model
+from ..model.pendulum import PendulumModel
 from ..plotting import link_label
-from ..simulate import Trajectory, hamiltonian_field, step_count
 from .calls import SimulateCall
 
 __all__ = [
@@ -37,7 +38,6 @@ __all__ = [
     "MAX_STEPS",
     "SIMULATOR_T_END",
     "SPEEDS",
-    "TRAIL",
     "build_simulator",
     "call_from_controls",
     "check_method",
@@ -64,8 +64,6 @@ DT_CHOICES = (0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5)
 MAX_STEPS = 100_000
 #: Playback speeds the simulators offer: simulated seconds per real second.
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
-#: Default length of the trail behind the last bob [s].
-TRAIL = 2.0
 #: The range of a simulator's run length ``t_end`` [s].
 SIMULATOR_T_END = (1.0, 60.0)
 
@@ -170,12 +168,7 @@ def check_method(model: PendulumModel, method) -> str:
         the methods that can.
     """
     method = get_method(method)
-    reason = unsuitability(method, hamiltonian_field(model))
-    if reason is not None:
-        raise ValueError(
-            f"`method` {method.name!r} cannot integrate this model ({forces_text(model)}): "
-            f"{reason}. Methods that can: {methods_for(model)}"
-        )
+    check_method_fits(model, method, hamiltonian_field(model))  # the driver's own check
     return method.name
 
 
@@ -413,7 +406,7 @@ def build_simulator(
         For an argument out of range, or a first run that cannot be computed
         (the simulator's message).
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     theta0, omega0 = start_state(model.n, theta0, omega0)
     speed = check.choice("speed", speed, SPEEDS)
     trail = check.non_negative_number("trail", trail)

@@ -17,10 +17,11 @@ import ipywidgets as widgets
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from .. import _validation as check
 from .. import plotting
+from .. import validation as check
 from ..analysis import equilibrium_angles, find_equilibrium, rest_state_at_energy
-from ..model import PendulumModel
+from ..model import require_model
+from ..model.pendulum import PendulumModel
 from .background import BackgroundCache
 from .calls import SimulateCall
 from .controls import (
@@ -271,7 +272,7 @@ def explore(
     >>> float(ex.trajectory.theta[0, 0])
     0.5
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     theta0, omega0 = start_state(model.n, theta0, omega0)
     ex = Explorer(model, method, t_end, dt, theta0, omega0, plots)
     ex.update()
@@ -324,7 +325,7 @@ class EquilibriumExplorer(Instrument):
 
     @property
     def equilibrium(self):
-        """The selected :class:`~pendulum_lab.mechanics.Equilibrium`."""
+        """The selected :class:`~pendulum_lab.symbolic.mechanics.Equilibrium`."""
         return self.model.chain.equilibrium(self.controls["equilibrium"].value)
 
     def prepare(self) -> SimulateCall:
@@ -396,7 +397,7 @@ def explore_equilibrium(
         For a model with damping or a drive (its linearisation is not the
         conservative chain's), with the reason.
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     if not energy_is_conserved(model):
         raise ValueError(
             "`model` must have no damping and no drive: explore_equilibrium compares the motion "
@@ -492,7 +493,7 @@ def explore_energy(
         For a model with damping or a drive (its energy does not stay on a
         level), with the reason.
     """
-    model = check.pendulum_model(model)
+    model = require_model(model)
     if not energy_is_conserved(model):
         raise ValueError(
             "`model` must have no damping and no drive: explore_energy follows the chain on one "

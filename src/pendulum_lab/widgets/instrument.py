@@ -35,10 +35,10 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .._png import png_bytes
+from ..driver.simulate import Trajectory, step_count
 from ..integrators import ConvergenceError
-from ..model import PendulumModel
-from ..simulate import Trajectory, step_count
+from ..model.pendulum import PendulumModel
+from ..plotting.png import png_bytes
 from .calls import SimulateCall
 from .controls import column, energy_is_conserved, forces_text
 from .status import StatusLine

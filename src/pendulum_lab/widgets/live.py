@@ -38,16 +38,16 @@ import math
 import numpy as np
 import traitlets
 
-from .. import _validation as check
-from ..model import PendulumModel
-from ..plotting import wrap_angle
-from ..simulate import Trajectory
+from .. import validation as check
+from ..driver.simulate import Trajectory
+from ..model import require_model, wrap_angle
+from ..model.pendulum import PendulumModel
+from ..plotting.scene import TRAIL, still_frame
 from .calls import SimulateCall
 from .channel import STATIC, ReplayWidget, float32_buffer
 from .controls import (
     SIMULATOR_T_END,
     SPEEDS,
-    TRAIL,
     build_simulator,
     call_from_controls,
     control_names,
@@ -130,7 +130,7 @@ def run_messages(
     """
     if not isinstance(traj, Trajectory) or traj.theta.ndim != 2:
         raise TypeError("`traj` must be a single Trajectory (angles of shape (N+1, n))")
-    check.pendulum_model(model)
+    require_model(model)
     chunk_states = check.integer_at_least("chunk_states", chunk_states, 1)
     stride = playback_stride(traj.dt)
     kept = np.arange(0, len(traj.t), stride)
@@ -206,7 +206,7 @@ def released_angles(model: PendulumModel, theta, bob: int, x: float, y: float) -
     >>> released_angles(pl.double_pendulum(), [0.0, 0.0], 0, 5.0, 0.0)  # far right: clamped
     array([1.57079633, 0.        ])
     """
-    check.pendulum_model(model)
+    require_model(model)
     theta = check.state_vector("theta", theta, model.n)
     bob = check.index_below("bob", bob, model.n)
     x, y = check.real_number("x", x), check.real_number("y", y)
@@ -318,8 +318,6 @@ class LiveSimulator(Instrument):
     def picture(self) -> tuple[str, bytes]:
         """The run drawn by :func:`pendulum_lab.animation.still_frame` at its last state (the
         whole motion's energies), for a page without a kernel, where nothing can play."""
-        from ..animation import still_frame  # animation builds on the widgets' controls
-
         return "image/png", still_frame(self.trajectory, self.model, trail=self.view.trail)
 
     # ---- dragging ---------------------------------------------------------------------------
@@ -373,7 +371,7 @@ class LiveSimulator(Instrument):
 
 
 def _trait_checked(check_value, name, value, *args):
-    """A check of :mod:`pendulum_lab._validation` as a trait validator (a ``TraitError``)."""
+    """A check of :mod:`pendulum_lab.validation` as a trait validator (a ``TraitError``)."""
     try:
         return check_value(name, value, *args)
     except (TypeError, ValueError) as err:

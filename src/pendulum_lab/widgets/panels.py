@@ -8,8 +8,8 @@ their own from the explorer's trajectory.
 from __future__ import annotations
 
 from ..chaos import separation
-from ..model import PendulumModel
-from ..simulate import Trajectory
+from ..driver.simulate import Trajectory
+from ..model.pendulum import PendulumModel
 
 __all__ = ["separation_panel"]
 

@@ -1,0 +1,341 @@
+"""The ``pendulum-lab`` command (also ``python -m pendulum_lab``).
+
+Usage::
+
+    pendulum-lab                         same as `pendulum-lab lab`
+    pendulum-lab lab [--dir DIR] [--force] [--no-browser] [--port N] [-- JUPYTER_OPTIONS]
+    pendulum-lab report ...              when pendulum_lab/report.py provides it
+
+``lab`` opens JupyterLab on the course notebooks:
+
+* from a source checkout (a ``notebooks/`` folder next to ``src/``), on that
+  folder, in place;
+* from an installed wheel, the notebooks shipped inside the package
+  (``pendulum_lab/notebooks``) are first copied to a writable folder
+  (``--dir``, default ``./pendulum_lab_course``), so nobody edits
+  site-packages. A notebook already there that differs from the shipped one
+  (the student's edited copy) is kept unless ``--force`` is given.
+
+``--dir`` given explicitly always copies, also from a checkout (a scratch
+copy of the course). Options after ``--`` go to JupyterLab unchanged, for
+example ``pendulum-lab -- --allow-root`` inside a container running as root.
+
+Adding a subcommand from another module
+---------------------------------------
+:func:`build_parser` imports ``pendulum_lab.app.report`` if it exists and calls
+its ``add_report_command(subparsers)``, which must add a subparser (named
+``report``) and set its handler with ``parser.set_defaults(handler=...)``; the
+handler receives the parsed ``argparse.Namespace`` and returns the exit
+status. Nothing else in this file needs to change.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import importlib.resources
+import importlib.util
+import os
+import subprocess
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["CopyReport", "build_parser", "copy_course", "lab_command", "main"]
+
+DEFAULT_DIR = "pendulum_lab_course"
+START_NOTEBOOK = "00_start_here.ipynb"
+# Files of the notebooks folder that are not course material (test hooks, caches).
+_NOT_COURSE = {"conftest.py", "__pycache__", ".ipynb_checkpoints", ".pytest_cache"}
+
+
+# --------------------------------------------------------------------------- where the course is
+def checkout_notebooks() -> Path | None:
+    """The ``notebooks/`` folder of a source checkout this package runs from, if any."""
+    package = Path(__file__).resolve().parents[1]  # pendulum_lab/app/cli.py
+    src = package.parent
+    root = src.parent
+    folder = root / "notebooks"
+    if src.name == "src" and (root / "pyproject.toml").is_file() and folder.is_dir():
+        return folder
+    return None
+
+
+def packaged_notebooks():
+    """The notebooks shipped inside an installed wheel (``pendulum_lab/notebooks``), if any."""
+    folder = importlib.resources.files("pendulum_lab") / "notebooks"
+    return folder if folder.is_dir() else None
+
+
+# --------------------------------------------------------------------------- copying
+@dataclass
+class CopyReport:
+    """What :func:`copy_course` did, as paths relative to the destination."""
+
+    copied: list[str] = field(default_factory=list)
+    unchanged: list[str] = field(default_factory=list)
+    kept: list[str] = field(default_factory=list)
+    replaced: list[str] = field(default_factory=list)
+
+    def summary(self) -> str:
+        lines = [
+            f"{len(self.copied)} copied, {len(self.unchanged)} already up to date, "
+            f"{len(self.replaced)} replaced, {len(self.kept)} kept"
+        ]
+        if self.kept:
+            lines.append(
+                "Kept your edited copies (run with --force to replace them with the "
+                "course's version): " + ", ".join(self.kept)
+            )
+        return "\n".join(lines)
+
+
+def _course_files(source, prefix: str = ""):
+    """``(relative path, traversable)`` of every course file under ``source``, sorted."""
+    for entry in sorted(source.iterdir(), key=lambda e: e.name):
+        if entry.name in _NOT_COURSE or entry.name.startswith("."):
+            continue
+        relative = f"{prefix}{entry.name}"
+        if entry.is_dir():
+            yield from _course_files(entry, relative + "/")
+        else:
+            yield relative, entry
+
+
+def copy_course(source, destination: Path, force: bool = False) -> CopyReport:
+    """Copy the course notebooks from ``source`` into ``destination``.
+
+    Parameters
+    ----------
+    source : pathlib.Path or importlib.resources.abc.Traversable
+        Folder of the shipped notebooks.
+    destination : pathlib.Path
+        Created if missing.
+    force : bool
+        Replace files that exist and differ from the shipped version. Without
+        it they are kept: they are the student's edited (or executed) copies.
+
+    Returns
+    -------
+    CopyReport
+    """
+    destination = Path(destination)
+    if destination.exists() and not destination.is_dir():
+        raise ValueError(f"`--dir` must be a folder, but {destination} is a file")
+    report = CopyReport()
+    for relative, entry in _course_files(source):
+        target = destination / relative
+        data = entry.read_bytes()
+        if target.exists():
+            if target.read_bytes() == data:
+                report.unchanged.append(relative)
+                continue
+            if not force:
+                report.kept.append(relative)
+                continue
+            report.replaced.append(relative)
+        else:
+            report.copied.append(relative)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(data)
+    return report
+
+
+# --------------------------------------------------------------------------- JupyterLab
+def lab_command(
+    root: Path,
+    *,
+    no_browser: bool = False,
+    port: int | None = None,
+    extra: Sequence[str] = (),
+    python: str | None = None,
+    as_root: bool | None = None,
+) -> list[str]:
+    """The command line that starts JupyterLab on ``root`` (opening the start notebook).
+
+    ``extra`` options are appended unchanged (they come last, so they win).
+    Run as root (containers, CI machines), JupyterLab refuses to start unless
+    told ``--allow-root``; ``as_root`` (by default: the effective user is
+    root) adds it.
+    """
+    root = Path(root).resolve()
+    command = [python or sys.executable, "-m", "jupyterlab", f"--ServerApp.root_dir={root}"]
+    if (root / START_NOTEBOOK).is_file():
+        command.append(f"--LabApp.default_url=/lab/tree/{START_NOTEBOOK}")
+    if no_browser:
+        command.append("--no-browser")
+    if port is not None:
+        command.append(f"--port={port}")
+    if as_root is None:
+        as_root = hasattr(os, "geteuid") and os.geteuid() == 0
+    if as_root and "--allow-root" not in extra:
+        command.append("--allow-root")
+    return command + list(extra)
+
+
+def _run(command: list[str]) -> int:
+    """Hand over to JupyterLab until it is stopped (Ctrl-C).
+
+    On POSIX the launcher process *becomes* JupyterLab (``os.execv``), so a
+    signal sent to it (Ctrl-C, ``kill``) reaches the server directly and no
+    orphaned server is left behind. Elsewhere JupyterLab runs as a child.
+    """
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if os.name == "posix":
+        os.execv(command[0], command)  # does not return
+    try:
+        return subprocess.call(command)
+    except KeyboardInterrupt:
+        return 0
+
+
+def course_folder(args, checkout: Path | None, packaged) -> tuple[Path, object | None]:
+    """Where JupyterLab should open, and the source to copy there first (or None).
+
+    Rules: an explicit ``--dir`` copies into it (from the checkout or the
+    wheel); otherwise a checkout opens in place and a wheel copies into
+    ``./pendulum_lab_course``.
+    """
+    source = checkout if checkout is not None else packaged
+    if source is None:
+        raise FileNotFoundError(
+            "no course notebooks found: neither a source checkout (notebooks/ next to src/) "
+            "nor notebooks inside the installed package (pendulum_lab/notebooks)"
+        )
+    if args.dir is not None:
+        return Path(args.dir), source
+    if checkout is not None:
+        return checkout, None
+    return Path(DEFAULT_DIR), source
+
+
+def run_lab(args) -> int:
+    """The ``lab`` subcommand."""
+    if importlib.util.find_spec("jupyterlab") is None:
+        print(
+            "JupyterLab is not installed. Install it with:  pip install 'pendulum_lab[lab]'",
+            file=sys.stderr,
+        )
+        return 1
+    try:
+        folder, source = course_folder(args, checkout_notebooks(), packaged_notebooks())
+        if source is not None:
+            report = copy_course(source, folder, force=args.force)
+            print(f"Course notebooks in {folder.resolve()}: {report.summary()}")
+    except (FileNotFoundError, ValueError, OSError) as err:
+        print(f"pendulum-lab: {err}", file=sys.stderr)
+        return 1
+    command = lab_command(
+        folder, no_browser=args.no_browser, port=args.port, extra=args.jupyter_options
+    )
+    print("Starting JupyterLab (stop it with Ctrl-C):", " ".join(command))
+    return _run(command)
+
+
+# --------------------------------------------------------------------------- parsing
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+    if not 1 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"must be in [1, 65535], got {value}")
+    return value
+
+
+def _add_lab_command(subparsers) -> None:
+    lab = subparsers.add_parser(
+        "lab",
+        help="open JupyterLab on the course (the default command)",
+        description="Open JupyterLab on the course notebooks. From an installed package the "
+        "notebooks are first copied to a writable folder.",
+    )
+    lab.add_argument(
+        "--dir",
+        default=None,
+        metavar="DIR",
+        help=f"folder to copy the notebooks into and open (default: the checkout's "
+        f"notebooks/ in place, or ./{DEFAULT_DIR} for an installed package)",
+    )
+    lab.add_argument(
+        "--force",
+        action="store_true",
+        help="replace notebooks in DIR that differ from the course's version",
+    )
+    lab.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    lab.add_argument("--port", type=_port, default=None, help="port for JupyterLab")
+    lab.add_argument(
+        "jupyter_options",
+        nargs="*",
+        metavar="-- JUPYTER_OPTIONS",
+        help="options passed on to JupyterLab unchanged, after `--` (for example: -- --allow-root)",
+    )
+    lab.set_defaults(handler=run_lab)
+
+
+def run_warmup(args) -> int:
+    """Compile the numerical kernels now instead of on first use."""
+    from .warmup import warm_up
+
+    seconds = warm_up(ns=args.n)
+    print(f"pendulum_lab kernels ready for chains of {args.n} link(s) ({seconds:.1f} s)")
+    return 0
+
+
+def _add_warmup_command(subparsers) -> None:
+    warm = subparsers.add_parser(
+        "warmup",
+        help="compile the numerical kernels now (otherwise they compile on first use)",
+        description="Compile, or load from the disk cache, every integrator kernel for the "
+        "given chain lengths. Run once after installing to make the first notebook fast.",
+    )
+    warm.add_argument("--n", type=int, nargs="+", default=[1, 2], metavar="N",
+                      help="chain lengths (numbers of links) to prepare (default: 1 2)")
+    warm.set_defaults(handler=run_warmup)
+
+
+def _add_optional_commands(subparsers) -> None:
+    """Subcommands of other modules of the application layer (``pendulum_lab.app.report``)."""
+    from . import report  # matplotlib: loaded only when the parser is built
+
+    report.add_report_command(subparsers)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with its subcommands (``lab`` and any optional ones)."""
+    from ..version import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="pendulum-lab",
+        description="Hamiltonian mechanics and geometric integration, through pendulums. "
+        "Without a command, runs `lab`.",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    _add_lab_command(subparsers)
+    _add_warmup_command(subparsers)
+    _add_optional_commands(subparsers)
+    parser.set_defaults(commands=tuple(subparsers.choices))
+    return parser
+
+
+def _with_default_command(argv: list[str], commands) -> list[str]:
+    """Insert ``lab`` unless a command or a top-level help/version flag is present."""
+    if argv and (argv[0] in commands or argv[0] in ("-h", "--help", "--version")):
+        return argv
+    return ["lab", *argv]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``pendulum-lab``; returns the exit status."""
+    parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    commands = parser.get_default("commands")
+    args = parser.parse_args(_with_default_command(argv, commands))
+    return args.handler(args)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

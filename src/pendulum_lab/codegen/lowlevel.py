@@ -1,0 +1,245 @@
+"""Every place where pendulum_lab reaches below Numba's ordinary ``@njit`` code: one module.
+
+The rest of the package is ordinary Numba code; what it cannot say in Numba's own language is
+here, each device with what it buys (measured on the double pendulum, x86-64, Numba 0.68 and
+llvmlite 0.50, the versions it was checked with; ``pyproject.toml`` keeps Numba below its next
+minor version for this reason):
+
+* **Views without a reference count** (:func:`span`, :func:`vector`, :func:`block`,
+  :func:`unmanaged`): slices of a step's workspace. An ordinary slice is reference counted:
+  every view and every argument passed on costs an atomic increment and decrement, several
+  times the arithmetic of a small step. These views own nothing, so they must not outlive the
+  array they point into (:func:`keep_alive` marks where it may be freed).
+* **A stack buffer** (:func:`stack_floats`): the stage sums of an implicit Runge-Kutta step,
+  accumulated where LLVM knows no other pointer reaches them, so that the loop over the stages
+  vectorizes (glrk16's stage sums took half the time).
+* **Bit casts** (:func:`float_bits`, :func:`bits_float`): the stopping rule takes maxima of
+  non-negative floats as integers, which LLVM vectorizes and a floating-point maximum it would
+  not (3 times as fast on 32 components).
+* **One ``sincos`` call** (:func:`sincos`): the sine and cosine of one angle from one call of
+  the C library, sharing the argument reduction as a C compiler would.
+* **LLVM function attributes** (:func:`align_stack`, :func:`inline_into_callers`): a 64-byte
+  aligned stack frame for the vectorized kernels (in some processes their 512-bit spills were
+  split over cache lines: 100 against 160-170 ns per field evaluation), and inlining across
+  compiled modules for functions called once per sweep (a glrk16 step 1.47 instead of 1.63 us).
+
+Tests check what each device does (results, bits, aliasing), never the machine code.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+
+import llvmlite.ir as llvm_ir
+import numba
+from numba.core import cgutils, types
+from numba.extending import intrinsic
+
+__all__ = [
+    "HAVE_SINCOS",
+    "align_stack",
+    "bits_float",
+    "block",
+    "float_bits",
+    "inline_into_callers",
+    "keep_alive",
+    "sincos",
+    "span",
+    "stack_floats",
+    "unmanaged",
+    "vector",
+]
+
+
+# ------------------------------------------------------------------------- LLVM attributes
+@intrinsic
+def align_stack(typingctx):
+    """Align the calling kernel's stack frame to 64 bytes.
+
+    A loop vectorized with 512-bit registers spills some of them to the
+    stack. Unless the function asks for an aligned frame before its registers
+    are allocated, LLVM can only give the spill slots the 16-byte alignment
+    that the calling convention guarantees, and then the speed depends on
+    where the operating system happened to place the stack: the double
+    pendulum's 8-column field took 100 ns in some processes and 160-170 ns
+    in others (each 64-byte spill split over two cache lines). The function's
+    ``alignstack`` attribute makes its prologue realign the stack, so that
+    every process gets the fast placement.
+    """
+
+    def codegen(context, builder, sig, args):
+        attributes = builder.function.attributes
+        attributes.alignstack = 64
+        # llvmlite prints ``alignstack`` only beside another attribute; Numba's
+        # functions return errors as values and never unwind
+        attributes.add("nounwind")
+        return context.get_dummy_value()
+
+    return types.none(), codegen
+
+
+@intrinsic
+def inline_into_callers(typingctx):
+    """Mark the calling function ``alwaysinline``.
+
+    For functions called once per sweep of an implicit step with several
+    arrays, each passed as seven or nine values: the stopping rule
+    (``integrators.fixed_point_status``), which LLVM's cost model kept a
+    call, and the fields' ``stages`` kernels, which live in another compiled
+    module. Inlined, a ``glrk16`` step took 1.47 instead of 1.63 us (the
+    stopping rule) and its run over 1000 s 37 instead of 43 ms (the
+    ``stages`` kernel), measured. Numba cannot inline the stopping rule's
+    round-off test itself, whose division rules (``error_model``) differ from
+    its callers'; LLVM inlines the compiled function, rules included.
+    """
+
+    def codegen(context, builder, sig, args):
+        builder.function.attributes.add("alwaysinline")
+        return context.get_dummy_value()
+
+    return types.none(), codegen
+
+
+# ------------------------------------------------------------------------- bit casts
+@intrinsic
+def float_bits(typingctx, x):
+    """The bits of a float64 as an int64: for ``x >= 0`` they order as ``x`` does."""
+    def codegen(context, builder, sig, args):
+        return builder.bitcast(args[0], context.get_value_type(types.int64))
+
+    return types.int64(types.float64), codegen
+
+
+@intrinsic
+def bits_float(typingctx, bits):
+    """The float64 whose bits are ``bits`` (the inverse of :func:`float_bits`)."""
+    def codegen(context, builder, sig, args):
+        return builder.bitcast(args[0], context.get_value_type(types.float64))
+
+    return types.float64(types.int64), codegen
+
+
+# ------------------------------------------------------------------------- views and buffers
+@intrinsic
+def _element_address(typingctx, array, index):
+    """The address of ``array[index]`` (a 1-d contiguous array) as a typed pointer."""
+    signature = types.CPointer(array.dtype)(array, index)
+
+    def codegen(context, builder, sig, args):
+        data = context.make_array(sig.args[0])(context, builder, args[0]).data
+        return builder.gep(data, [args[1]])
+
+    return signature, codegen
+
+
+@numba.njit
+def span(memory, start, length):
+    """``memory[start : start + length]`` as a view without a reference count.
+
+    The step functions carve their workspace out of ``memory`` with this.
+    An ordinary slice is reference counted: each view and each argument
+    passed on costs an atomic increment and decrement, several times the
+    arithmetic of a small step; a reshape calls into Numba's runtime. This
+    view points into ``memory``'s data and owns nothing, so it must not
+    outlive ``memory`` (it never leaves the time loop), and ``memory`` must be
+    named again after the view's last use if nothing else holds it (:func:`keep_alive`).
+    """
+    return numba.carray(_element_address(memory, start), length)
+
+
+@numba.njit
+def vector(memory, index, n):
+    """The ``index``-th vector of ``n`` floats in ``memory`` (a :func:`span`)."""
+    return span(memory, index * n, n)
+
+
+@numba.njit
+def unmanaged(array):
+    """``array`` (1-d, contiguous) as a view without a reference count (see :func:`vector`)."""
+    return numba.carray(_element_address(array, 0), array.size)
+
+
+@numba.njit
+def block(memory, start, rows, columns):
+    """``memory[start:]`` as a C-ordered ``(rows, columns)`` array, a :func:`span` in 2-d."""
+    return numba.carray(_element_address(memory, start), (rows, columns))
+
+
+@numba.njit
+def keep_alive(array):
+    """Nothing: a use of ``array`` that keeps it alive up to this point.
+
+    Numba frees an array after the last line that names it. A function that hands out views
+    of an array it allocated (:func:`span`) must name the array again after the views' last
+    use, or the memory may be given to another allocation while the views still point there.
+    """
+
+
+@intrinsic
+def stack_floats(typingctx, count):
+    """A float64 array of ``count`` (a literal) elements on the calling function's stack."""
+    if not isinstance(count, types.IntegerLiteral):
+        return None
+    size = count.literal_value
+    array_type = types.Array(types.float64, 1, "C")
+
+    def codegen(context, builder, sig, args):
+        buffer = cgutils.alloca_once(builder, llvm_ir.ArrayType(llvm_ir.DoubleType(), size))
+        buffer.align = 64
+        array = context.make_array(array_type)(context, builder)
+        intp = context.get_value_type(types.intp)
+        context.populate_array(array, data=builder.bitcast(buffer, array.data.type),
+                               shape=[intp(size)], strides=[intp(8)], itemsize=intp(8),
+                               meminfo=None)
+        return array._getvalue()
+
+    return array_type(count), codegen
+
+
+# ------------------------------------------------------------------------- sine and cosine
+def _c_library_has_sincos() -> bool:
+    try:
+        return hasattr(ctypes.CDLL(ctypes.util.find_library("m")), "sincos")
+    except OSError:
+        return False
+
+
+#: Whether the C math library has ``sincos`` (glibc does; it is not standard C).
+HAVE_SINCOS = _c_library_has_sincos()
+
+
+@intrinsic
+def sincos(typingctx, x):
+    """``(sin(x), cos(x))`` for a float ``x``, from one call of the C library's ``sincos``.
+
+    The kernels need the sine and the cosine of the same angle differences
+    (the mass matrix has ``cos(theta_i - theta_j)``, the forces
+    ``sin(theta_i - theta_j)``); one call shares the argument reduction, as a C
+    compiler arranges by itself (LLVM, behind Numba, does not). glibc's
+    ``sincos`` returns exactly ``sin(x)`` and ``cos(x)``. Without ``sincos`` in
+    the C library, two separate calls.
+    """
+    if not isinstance(x, types.Float):
+        return None
+    signature = types.UniTuple(types.float64, 2)(types.float64)
+
+    def codegen(context, builder, sig, args):
+        double = llvm_ir.DoubleType()
+        if HAVE_SINCOS:
+            function = cgutils.get_or_insert_function(
+                builder.module,
+                llvm_ir.FunctionType(llvm_ir.VoidType(), [double, double.as_pointer(),
+                                                          double.as_pointer()]),
+                "sincos",
+            )
+            sine = cgutils.alloca_once(builder, double)
+            cosine = cgutils.alloca_once(builder, double)
+            builder.call(function, [args[0], sine, cosine])
+            values = [builder.load(sine), builder.load(cosine)]
+        else:
+            values = [builder.call(builder.module.declare_intrinsic(name, [double]), args)
+                      for name in ("llvm.sin", "llvm.cos")]
+        return context.make_tuple(builder, sig.return_type, values)
+
+    return signature, codegen

@@ -1,0 +1,22 @@
+"""The driver layer: a model, a method and a time grid make a trajectory.
+
+``simulate`` (runs and single steps), ``loops`` (the compiled time loop of each method on each
+field), ``segments`` (long runs handed out piece by piece), ``events`` (crossings located
+between steps), ``henon`` (Henon's step onto a surface of section) and ``cluster`` (ensembles
+on a Dask cluster).
+"""
+
+from .henon import henon_step
+from .segments import SegmentedRun, simulate_segments
+from .simulate import Trajectory, hamiltonian_field, simulate, step, step_count
+
+__all__ = [
+    "SegmentedRun",
+    "Trajectory",
+    "hamiltonian_field",
+    "henon_step",
+    "simulate",
+    "simulate_segments",
+    "step",
+    "step_count",
+]

@@ -1,0 +1,297 @@
+"""Long runs in segments: one driver for every computation that cannot keep all its steps.
+
+A Poincare section, a flip-time map or a Lyapunov exponent needs every step of
+a run, but not all of them at once: each piece of the run is examined and
+dropped. :func:`simulate_segments` cuts a run into consecutive
+:func:`~pendulum_lab.simulate` calls and hands them out one by one:
+
+* each segment starts exactly where the previous one ended, in the method's
+  own variables (``(theta, p)`` for the canonical methods), and at the right
+  time ``t`` (the ``t0`` of its :func:`~pendulum_lab.simulate` call), so the
+  segmented run is the same run as one long call, to the last bit (for a
+  field that depends on time, a driven one, up to the rounding of the step
+  times: a segment counts ``t0 + (s - 1) dt`` from its own start, which can
+  differ from the long call's in the last bit);
+* the steps are counted once, by :func:`~pendulum_lab.step_count`, and one
+  progress bar covers the whole run;
+* between segments the caller may drop ensemble members it is done with
+  (:meth:`SegmentedRun.keep`) or move the current state
+  (:meth:`SegmentedRun.restart`, for renormalisations).
+
+Examples
+--------
+>>> import numpy as np, pendulum_lab as pl
+>>> run = pl.simulate_segments(pl.double_pendulum(), [[0.1, 0.2], [2.0, 2.5]],
+...                            [[0.0, 0.0], [0.0, 0.0]], t_end=1.0, dt=0.01,
+...                            method="rk4", segment_steps=40)
+>>> [(round(float(seg.t[0]), 2), seg.theta.shape) for seg in run]
+[(0.0, (41, 2, 2)), (0.4, (41, 2, 2)), (0.8, (21, 2, 2))]
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterator
+
+import numpy as np
+
+from .. import validation as check
+from ..model import PendulumModel
+from .loops import compile_method
+from .simulate import (
+    Trajectory,
+    check_method_fits,
+    hamiltonian_field,
+    integrate,
+    progress_bar,
+    run_arguments,
+    to_method_variables,
+)
+
+__all__ = ["SegmentedRun", "default_segment_steps", "segment_length", "simulate_segments"]
+
+# Largest number of floats one segment may hold (about 16 MB).
+SEGMENT_FLOATS = 1 << 21
+# Long runs are cut into at least this many segments so a progress bar moves.
+PROGRESS_UPDATES = 50
+# Fewer steps than this per segment would make the per-call overhead dominate.
+MIN_SEGMENT = 1000
+
+
+def segment_length(n_steps: int, floats_per_step: int, multiple: int = 1) -> int:
+    """Steps per segment: few calls, bounded memory, a moving progress bar.
+
+    Parameters
+    ----------
+    n_steps : int
+        Steps of the whole run.
+    floats_per_step : int
+        Memory one step of a segment costs, in floats, over all members
+        (what the segment keeps and what the caller builds from it).
+    multiple : int
+        The length is a multiple of this (``save_every``, a renormalisation
+        interval).
+
+    Returns
+    -------
+    int
+        At most ``n_steps``.
+    """
+    length = max(math.ceil(n_steps / PROGRESS_UPDATES), MIN_SEGMENT)
+    length = min(length, max(multiple, SEGMENT_FLOATS // max(1, floats_per_step)))
+    length = multiple * max(1, math.ceil(length / multiple))
+    return min(length, n_steps)
+
+
+def default_segment_steps(n: int, members: int, n_steps: int, save_every: int) -> int:
+    """Steps per segment of :func:`simulate_segments` for ``members`` states of ``n`` links.
+
+    A caller that cuts a batch into chunks (:mod:`pendulum_lab.driver.cluster`) and
+    wants every chunk to run in the segments of the whole batch passes this,
+    computed for the whole batch, as ``segment_steps``: a driven model's
+    time at a step is rounded from the segment's start, so the segments must
+    not depend on the chunk.
+    """
+    # A kept state costs about four floats per link and member (angles and
+    # momenta, while stepping and in the segment handed out).
+    return segment_length(n_steps, 4 * n * members // save_every, save_every)
+
+
+class SegmentedRun:
+    """A run handed out in consecutive segments; build it with :func:`simulate_segments`.
+
+    Iterating yields one :class:`~pendulum_lab.Trajectory` per segment, with
+    the ensemble flattened: ``theta`` of shape ``(L+1, K, n)`` for the ``K``
+    members still running (``members`` gives their flat indices in the
+    initial ensemble). A segment's first state is the previous segment's last
+    one. The run stops after a segment in which some state became
+    non-finite (``completed`` is then False).
+
+    Attributes
+    ----------
+    model : PendulumModel
+        The model of the run; for a :class:`~pendulum_lab.model.ModelFamily`,
+        one member per running member (flat), so that it fits the segments.
+    method : Method
+    dt, t_end : float
+    t0 : float
+        Start time of the run [s].
+    n_steps : int
+        Steps of the whole run.
+    save_every, segment_steps : int
+    batch_shape : tuple
+        Ensemble shape of the initial state.
+    members : ndarray of int, shape (K,)
+        Flat indices of the members still running.
+    done : int
+        Steps taken so far.
+    time : float
+        Time of the current state [s]: ``t0 + done * dt``.
+    completed : bool
+    evaluations : int
+        Vector-field evaluations so far, over all members.
+    sweeps : float
+        Implicit-solver iterations so far, summed over members.
+    wall_time : float
+        Seconds spent stepping.
+    """
+
+    def __init__(self, model, theta0, start, given_momenta: bool, *, method, dt: float,
+                 t_end: float, n_steps: int, save_every: int, segment_steps: int, t0: float,
+                 progress, label: str):
+        self.method, self.dt, self.t0, self.t_end = method, dt, t0, t_end
+        self.n_steps, self.save_every, self.segment_steps = n_steps, save_every, segment_steps
+        self.batch_shape = theta0.shape[:-1]
+        self.model = model.for_ensemble(self.batch_shape)
+        self._theta = theta0.reshape(-1, model.n).copy()
+        self._state = to_method_variables(self.model, method, self._theta,
+                                           start.reshape(-1, model.n), given_momenta)
+        # What the method carries from step to step (its last stage slopes, the
+        # rounding it compensates): kept across segments, so that the segmented
+        # run is the one long run to the last bit.
+        field = hamiltonian_field(self.model)
+        check_method_fits(model, method, field)
+        self._compiled = compile_method(method, field, model.n)
+        self._memory = self._compiled.new_memory(self._theta.shape[0])
+        self.members = np.arange(self._theta.shape[0])
+        self.done = 0
+        self.completed = True
+        self.evaluations, self.sweeps, self.wall_time = 0, 0.0, 0.0
+        self._progress, self._label = progress, label
+
+    @property
+    def time(self) -> float:
+        """Time of the current state [s], where the next segment starts."""
+        return self.t0 + self.done * self.dt
+
+    def __iter__(self) -> Iterator[Trajectory]:
+        n = self.model.n
+        given = "p0" if self.method.variables == "canonical" else "omega0"
+        bar = progress_bar(self.n_steps, self.n_steps * len(self.members), self._progress,
+                           self._label)
+        try:
+            while self.done < self.n_steps and self.completed and len(self.members):
+                steps = min(self.segment_steps, self.n_steps - self.done)
+                segment = integrate(
+                    self.model, self._compiled, self._theta.copy(), self._state.copy(),
+                    (len(self.members),), t_end=steps * self.dt, dt=self.dt, n_steps=steps,
+                    save_every=self.save_every, t0=self.time, progress=False,
+                    memory=self._memory,
+                )
+                self.done += steps
+                self.completed = segment.completed
+                self.evaluations += segment.evaluations
+                self.sweeps += segment.mean_iterations * steps * len(self.members)
+                self.wall_time += segment.wall_time
+                # The method's own variables: a restart involves no conversion.
+                self._theta = segment.theta[-1].reshape(-1, n)
+                own = segment.p if given == "p0" else segment.omega
+                self._state = own[-1].reshape(-1, n)
+                if bar is not None:
+                    bar.update(steps)
+                yield segment
+        finally:
+            if bar is not None:
+                bar.close()
+
+    def keep(self, mask) -> None:
+        """Go on with the members where ``mask`` (shape ``(K,)``, over ``members``) is True."""
+        mask = np.asarray(mask, dtype=bool)
+        if mask.shape != self.members.shape:
+            raise ValueError(f"`mask` must have shape {self.members.shape} (one entry per "
+                             f"running member), got {mask.shape}")
+        self.members = self.members[mask]
+        self._theta, self._state = self._theta[mask], self._state[mask]
+        self._memory = self._memory[mask]
+        if self.model.shape:
+            self.model = self.model.select(mask)
+            # the same kernels and compiled loop, with the remaining members' parameters
+            self._compiled = dataclasses.replace(self._compiled,
+                                                 field=hamiltonian_field(self.model))
+
+    def restart(self, theta, p, where=None) -> None:
+        """Go on from ``(theta, p)`` instead of the current state.
+
+        Parameters
+        ----------
+        theta, p : array_like, shape (k, n)
+            The new angles and canonical momenta.
+        where : array_like of bool, shape (K,), optional
+            Which running members move (``k`` of them); all by default. The
+            others go on from exactly where they are.
+        """
+        n = self.model.n
+        where = (np.ones(len(self.members), dtype=bool) if where is None
+                 else np.asarray(where, dtype=bool))
+        if where.shape != self.members.shape:
+            raise ValueError(f"`where` must have shape {self.members.shape} (one entry per "
+                             f"running member), got {where.shape}")
+        shape = (int(where.sum()), n)
+        theta = check.state_array("theta", theta, n)
+        p = check.state_array("p", p, n)
+        if theta.shape != shape or p.shape != shape:
+            raise ValueError(f"`theta` and `p` must have shape {shape}, got {theta.shape} and "
+                             f"{p.shape}")
+        # Copies: the current state is a view into the last segment handed out.
+        self._theta, self._state = self._theta.copy(), self._state.copy()
+        self._theta[where] = theta
+        moved = self.model.select(where) if self.model.shape else self.model
+        self._state[where] = to_method_variables(moved, self.method, theta, p,
+                                                  given_momenta=True)
+        self._memory[where] = 0.0  # a moved member starts afresh
+
+
+def simulate_segments(
+    model: PendulumModel,
+    theta0,
+    omega0=None,
+    *,
+    t_end: float,
+    dt: float = 0.01,
+    method="glrk4",
+    save_every: int = 1,
+    p0=None,
+    t0: float = 0.0,
+    segment_steps: int | None = None,
+    progress: bool | None = None,
+    label: str | None = None,
+) -> SegmentedRun:
+    """A run of :func:`~pendulum_lab.simulate`, handed out in consecutive segments.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    theta0, omega0, p0 : array_like, shape (n,) or (..., n)
+        The initial state, as for :func:`~pendulum_lab.simulate`.
+    t_end, dt, method, save_every, t0
+        As for :func:`~pendulum_lab.simulate`; the run takes
+        ``step_count(t_end, dt)`` steps in all.
+    segment_steps : int, optional
+        Steps per segment, a multiple of ``save_every``; by default
+        :func:`segment_length` of the states a segment keeps.
+    progress : bool, optional
+        One progress bar for the whole run; by default only for long runs.
+    label : str, optional
+        Text of the progress bar (default: the method's name).
+
+    Returns
+    -------
+    SegmentedRun
+        Iterate over it for the segments.
+    """
+    method, theta0, start, (t_end, dt, n_steps), save_every, t0 = run_arguments(
+        model, theta0, omega0, p0, t_end, dt, method, save_every, t0
+    )
+    if segment_steps is None:
+        segment_steps = default_segment_steps(model.n, max(1, theta0.size // model.n), n_steps,
+                                              save_every)
+    else:
+        segment_steps = check.integer_at_least("segment_steps", segment_steps, 1)
+        if segment_steps % save_every:
+            raise ValueError(f"`segment_steps` must be a multiple of `save_every` "
+                             f"({save_every}), got {segment_steps}")
+    return SegmentedRun(model, theta0, start, p0 is not None, method=method, dt=dt,
+                        t_end=t_end, n_steps=n_steps, save_every=save_every,
+                        segment_steps=segment_steps, t0=t0, progress=progress,
+                        label=label or method.name)

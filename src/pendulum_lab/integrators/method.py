@@ -1,0 +1,79 @@
+"""A method as data: its name, order, structure and compiled step."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .runge_kutta import tableau_step
+from .tableau import ButcherTableau
+
+__all__ = ["ANY_FIELD", "CONFORMAL_FIELD", "HAMILTONIAN_FIELD", "LAGRANGIAN_FIELD", "Method"]
+
+#: Values of :attr:`Method.applies_to`.
+ANY_FIELD, HAMILTONIAN_FIELD, CONFORMAL_FIELD = "any", "hamiltonian", "conformal"
+LAGRANGIAN_FIELD = "lagrangian"
+
+
+@dataclass(frozen=True)
+class Method:
+    """An integrator: its properties and its compiled one-step map.
+
+    Build a Runge-Kutta method with :meth:`from_tableau`, which derives every
+    property from the tableau.
+
+    Attributes
+    ----------
+    name : str
+    order : int
+        Classical order of accuracy.
+    symplectic : bool
+        Symplectic for every Hamiltonian (in the variables it works in); for
+        the conformal methods: conformal symplectic on damped fields.
+    implicit : bool
+        Solves equations at each step (for non-separable ``H``).
+    variables : {"canonical", "velocity"}
+        ``(q, p)`` or, for the course report's versions, ``(q, v)``.
+    summary : str
+        One line for tables and dropdowns.
+    kernel : Step
+        The step function (see the module docstring); ``kernel.py_func`` is
+        its Python source, ``kernel.memory(n)`` the floats it keeps per
+        trajectory; :mod:`pendulum_lab.driver.loops` compiles it with each field.
+    applies_to : {"any", "hamiltonian", "conformal", "lagrangian"}
+        The fields it integrates: any; Hamiltonian ones (``damping_rate``
+        zero); conformal ones (``damping_rate`` finite, zero included);
+        those with a discrete Lagrangian (an unforced chain: no damping, no
+        drive).
+    tableau : ButcherTableau or None
+        The Butcher tableau of a Runge-Kutta method.
+    rule, solver : str or None
+        For a variational method (:func:`variational_method`): the discrete
+        Lagrangian's quadrature rule and how its step solves for ``q1``.
+    """
+
+    name: str
+    order: int
+    symplectic: bool
+    implicit: bool
+    variables: str
+    summary: str
+    kernel: object = field(repr=False)
+    applies_to: str = ANY_FIELD
+    tableau: ButcherTableau | None = field(default=None, repr=False)
+    rule: str | None = None
+    solver: str | None = None
+
+    @classmethod
+    def from_tableau(cls, name: str, tableau: ButcherTableau, summary: str) -> Method:
+        """The Runge-Kutta method of ``tableau`` on ``(q, p)``; nothing typed but the name.
+
+        Order, implicitness and symplecticity come from the tableau
+        (:class:`~pendulum_lab.integrators.tableau.ButcherTableau`), the step function from
+        :func:`tableau_step`. A Runge-Kutta method integrates any field.
+        """
+        return cls(name, tableau.order, tableau.symplectic_condition().holds,
+                   not tableau.explicit, "canonical", summary, tableau_step(tableau, name),
+                   tableau=tableau)
+
+    def __str__(self) -> str:
+        return self.name

@@ -1,0 +1,165 @@
+"""The registry of methods: every integrator the course compares, by name.
+
+A Runge-Kutta method is one entry made from its Butcher tableau by
+:meth:`~pendulum_lab.integrators.method.Method.from_tableau`; the other families declare
+their properties next to their step. :func:`get_method` looks a method up,
+:func:`unsuitability` says why a method cannot integrate a field, and :func:`step_kernels`
+picks the two kernels a method's step receives from a field.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .field import HamiltonianField
+from .method import ANY_FIELD, CONFORMAL_FIELD, HAMILTONIAN_FIELD, LAGRANGIAN_FIELD, Method
+from .symplectic import (
+    conformal_euler_step,
+    conformal_leapfrog_step,
+    leapfrog_step,
+    semi_implicit_euler_step,
+)
+from .tableau import ButcherTableau, gauss_legendre_tableau
+from .variational import VARIATIONAL_SOLVERS, variational_method
+from .velocity import leapfrog_velocity_step, semi_implicit_euler_velocity_step
+
+__all__ = [
+    "CONFORMAL_METHODS",
+    "MAIN_METHODS",
+    "METHODS",
+    "VARIATIONAL_METHODS",
+    "get_method",
+    "step_kernels",
+    "suitable_methods",
+    "unsuitability",
+]
+
+
+_REGISTRY = [
+    Method.from_tableau("explicit_euler", ButcherTableau(a=[[0.0]], b=[1.0]),
+                        "explicit Euler: y1 = y + h f(y)"),
+    Method("semi_implicit_euler", 1, True, True, "canonical",
+           "symplectic Euler in (theta, p): implicit in p1 unless H is separable",
+           semi_implicit_euler_step, applies_to=HAMILTONIAN_FIELD),
+    Method("leapfrog", 2, True, True, "canonical",
+           "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step,
+           applies_to=HAMILTONIAN_FIELD),
+    Method.from_tableau("rk4", ButcherTableau(a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0],
+                                                 [0, 0, 1, 0]], b=[1 / 6, 1 / 3, 1 / 3, 1 / 6]),
+                        "classical fourth-order Runge-Kutta"),
+    # The course report's method (section 2.4.5): c = 1/2 -+ sqrt(3)/6, order 4.
+    Method.from_tableau("glrk4", gauss_legendre_tableau(2),
+                        "two-stage Gauss-Legendre collocation (implicit Runge-Kutta)"),
+    # Four stages, order 8: far fewer steps where high accuracy is wanted.
+    Method.from_tableau("glrk8", gauss_legendre_tableau(4),
+                        "four-stage Gauss-Legendre collocation (order 8, implicit)"),
+    # Six stages, order 12: for tight tolerances over long runs.
+    Method.from_tableau("glrk12", gauss_legendre_tableau(6),
+                        "six-stage Gauss-Legendre collocation (order 12, implicit)"),
+    # Eight stages, order 16: they fill one pass of the vectorized stage kernel
+    # (LANE_GROUP columns, where glrk12's six leave two for padding), so a sweep
+    # costs about what glrk12's does and the steps are longer.
+    Method.from_tableau("glrk16", gauss_legendre_tableau(8),
+                        "eight-stage Gauss-Legendre collocation (order 16, implicit)"),
+    Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
+           "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
+           semi_implicit_euler_velocity_step),
+    Method("leapfrog_velocity", 2, False, False, "velocity",
+           "the report's leapfrog on (theta, omega): not symplectic for n >= 2",
+           leapfrog_velocity_step),
+    Method("conformal_euler", 1, True, True, "canonical",
+           "conformal symplectic Euler: symplectic Euler, then the exact linear damping",
+           conformal_euler_step, applies_to=CONFORMAL_FIELD),
+    Method("conformal_leapfrog", 2, True, True, "canonical",
+           "conformal Stormer-Verlet: exact damping for h/2, leapfrog, damping for h/2",
+           conformal_leapfrog_step, applies_to=CONFORMAL_FIELD),
+    # Fixed-point iteration, as for Gauss-Legendre. Newton's method with the
+    # generated Jacobian needs half the iterations and is faster per step
+    # (benchmark item 7), but at large steps it can converge to another root
+    # of the discrete equations, off the branch that continues the small-step
+    # solution, where fixed-point iteration stops with an error
+    # (tests/integrators/test_variational.py): no result is silently wrong.
+    variational_method("midpoint", "fixed_point"),
+    variational_method("trapezoid", "fixed_point"),
+]
+#: The methods for Hamiltonian systems, compared throughout the course.
+METHODS: dict[str, Method] = {
+    m.name: m for m in _REGISTRY if m.applies_to in (ANY_FIELD, HAMILTONIAN_FIELD)
+}
+#: The methods for damped (conformal Hamiltonian) systems; on a Hamiltonian
+#: field they are symplectic Euler and the leapfrog.
+CONFORMAL_METHODS: dict[str, Method] = {
+    m.name: m for m in _REGISTRY if m.applies_to == CONFORMAL_FIELD
+}
+#: The variational integrators of notebook 15, made from discrete Lagrangians;
+#: on the chains they coincide with, or stay within O(h^3) per step of, the
+#: implicit midpoint rule and the leapfrog.
+VARIATIONAL_METHODS: dict[str, Method] = {
+    m.name: m for m in _REGISTRY if m.applies_to == LAGRANGIAN_FIELD
+}
+# The tableaus by name, for notebooks and tests (the registry holds them).
+EULER_TABLEAU = METHODS["explicit_euler"].tableau
+RK4_TABLEAU = METHODS["rk4"].tableau
+GAUSS4_TABLEAU = METHODS["glrk4"].tableau
+GAUSS8_TABLEAU = METHODS["glrk8"].tableau
+GAUSS12_TABLEAU = METHODS["glrk12"].tableau
+GAUSS16_TABLEAU = METHODS["glrk16"].tableau
+
+MAIN_METHODS = ("explicit_euler", "semi_implicit_euler", "leapfrog", "rk4", "glrk4")
+
+
+def get_method(method) -> Method:
+    """Look up a method by name (or pass a :class:`Method` through)."""
+    if isinstance(method, Method):
+        return method
+    if not isinstance(method, str):
+        raise TypeError(f"`method` must be a method name (str), got {type(method).__name__}")
+    for registry in (METHODS, CONFORMAL_METHODS, VARIATIONAL_METHODS):
+        if method in registry:
+            return registry[method]
+    names = [*METHODS, *CONFORMAL_METHODS, *VARIATIONAL_METHODS]
+    raise ValueError(f"`method` must be one of {names}, got {method!r}")
+
+
+def _takes_stages(method: Method) -> bool:
+    """Whether ``method``'s step evaluates its stages through the field's ``stages`` kernel."""
+    return method.tableau is not None and method.implicit
+
+
+def unsuitability(method: Method, field: HamiltonianField) -> str | None:
+    """Why ``method`` cannot integrate ``field``, or None if it can."""
+    if _takes_stages(method) and field.stages is None:
+        return (f"{method.name} evaluates its stages together, through the field's `stages` "
+                "kernel, and this field has none")
+    rates = np.asarray(field.damping_rate, dtype=float)
+    if method.applies_to in (HAMILTONIAN_FIELD, LAGRANGIAN_FIELD) and np.any(rates != 0):
+        return (f"{method.name} assumes a Hamiltonian vector field, and damping is not "
+                "Hamiltonian (its guesses and its symplecticity rely on dp/dt = -H_q)")
+    if method.applies_to == LAGRANGIAN_FIELD and field.discrete is None:
+        return (f"{method.name} steps the discrete Lagrangian of the unforced chain, "
+                "L = T - V, and a drive torque is not part of L")
+    if method.applies_to == CONFORMAL_FIELD and not np.all(np.isfinite(rates)):
+        return (f"{method.name} needs damping of the conformal form dp/dt = -H_q - gamma p "
+                "with a constant gamma")
+    return None
+
+
+def suitable_methods(field: HamiltonianField) -> list[str]:
+    """Names of the registered methods that integrate ``field``."""
+    return [m.name for m in _REGISTRY if unsuitability(m, field) is None]
+
+
+def step_kernels(method: Method, field: HamiltonianField) -> tuple:
+    """The two kernels ``method``'s step receives for ``field``.
+
+    ``(field.hamilton, field.acceleration)``; for an implicit Runge-Kutta
+    method ``(field.hamilton, field.stages)``; for a variational method the
+    update and the momentum of the field's discrete Legendre transforms
+    (compiled on first use).
+    """
+    if method.rule is None:
+        if _takes_stages(method):
+            return field.hamilton, field.stages
+        return field.hamilton, field.acceleration
+    kernels = field.discrete(method.rule)
+    return getattr(kernels, VARIATIONAL_SOLVERS[method.solver]), kernels.impulse

@@ -1,0 +1,32 @@
+"""The model layer: pendulums with their numbers bound, evaluated with NumPy.
+
+``pendulum`` holds :class:`PendulumModel` (one system), :class:`ModelFamily` (many that differ
+in some numbers), the factories and the checks of a model argument; ``numeric`` the functions
+of a chain (lambdified, or looped for long chains); ``angles`` the wrapping of angles.
+"""
+
+from .angles import wrap_angle
+from .pendulum import (
+    FAMILY_PARAMETERS,
+    ModelFamily,
+    PendulumModel,
+    double_pendulum,
+    driven_pendulum,
+    n_pendulum,
+    require_double_pendulum,
+    require_model,
+    simple_pendulum,
+)
+
+__all__ = [
+    "FAMILY_PARAMETERS",
+    "ModelFamily",
+    "PendulumModel",
+    "double_pendulum",
+    "driven_pendulum",
+    "n_pendulum",
+    "require_double_pendulum",
+    "require_model",
+    "simple_pendulum",
+    "wrap_angle",
+]

@@ -1,0 +1,617 @@
+"""Numeric pendulum models: the symbolic equations with their parameters bound.
+
+Every numeric function here comes from :mod:`pendulum_lab.model.numeric`, made once per
+number of links from the equations of :mod:`pendulum_lab.symbolic.mechanics` with the
+parameters as arguments, so models that differ only in masses, lengths, ``g`` or forces share
+the compiled code and building one is cheap. All functions accept a batch of
+states: arrays of shape ``(..., n)``, so one code path serves one trajectory
+and an ensemble.
+
+A model with damping or a drive (``driven_pendulum``, or the ``damping``,
+``drive_amplitude``, ``drive_frequency`` arguments of the other factories)
+uses the forced chain of :mod:`pendulum_lab.symbolic.mechanics`; without them it is the
+conservative chain, unchanged. Functions of a driven model's equations take
+the time ``t``.
+
+A bifurcation diagram needs the same pendulum at hundreds of drive amplitudes.
+Running them one by one would pay the run's fixed costs hundreds of times;
+the compiled time loop instead accepts one row of parameters per ensemble
+member (:class:`~pendulum_lab.integrators.HamiltonianField`). A
+:class:`ModelFamily` is the model side of that: a
+:class:`~pendulum_lab.PendulumModel` whose numbers are arrays, one entry per
+member. Its NumPy functions broadcast those arrays against the states (the
+lambdified functions take the parameters as arguments), so energies,
+momenta and Jacobians of the whole family come out of one call, and
+:func:`~pendulum_lab.simulate` and :func:`~pendulum_lab.simulate_segments`
+run it like any model.
+
+Examples
+--------
+>>> import numpy as np, pendulum_lab as pl
+>>> family = pl.driven_pendulum().family(drive_amplitude=[1.0, 1.5])
+>>> run = pl.simulate(family, [[0.2], [0.2]], [[0.0], [0.0]], t_end=1.0, dt=0.1, method="rk4")
+>>> one = pl.simulate(family.member(1), [0.2], [0.0], t_end=1.0, dt=0.1, method="rk4")
+>>> bool(np.array_equal(run.theta[:, 1], one.theta))
+True
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import sympy as sp
+
+from .. import validation as check
+from ..symbolic.mechanics import derive_chain
+from .numeric import compiled_chain, solve_small
+
+__all__ = [
+    "FAMILY_PARAMETERS",
+    "ModelFamily",
+    "PendulumModel",
+    "double_pendulum",
+    "driven_pendulum",
+    "n_pendulum",
+    "require_double_pendulum",
+    "require_model",
+    "simple_pendulum",
+]
+
+#: The longest chain a numeric model accepts, and why (measured on unit chains).
+MAX_LINKS = 1000
+MAX_LINKS_REASON = (
+    "longer chains are untested: the mass matrix's condition number grows like n^2 (1.6e6 at "
+    "1000 links, where the linear-time solve already loses 5e-12 against a dense one) and its "
+    "fastest normal mode like sqrt(n) (about 200 rad/s at 1000 unit links), so the steps an "
+    "integrator needs shrink with n")
+
+
+class PendulumModel:
+    """A planar chain of ``n`` pendulums with numeric masses, lengths, ``g`` and forces.
+
+    Build one with :func:`simple_pendulum`, :func:`driven_pendulum`,
+    :func:`double_pendulum` or :func:`n_pendulum`. Angles are absolute,
+    measured from the downward vertical; ``theta``, ``omega`` (angular
+    velocities) and ``p`` (canonical momenta) are arrays of shape ``(n,)`` or
+    ``(..., n)``.
+
+    Parameters
+    ----------
+    n : int
+    masses, lengths : sequence of n positive floats
+    g : float
+    damping : float or sequence of n floats >= 0
+        Viscous damping coefficient of each joint [N m s/rad]: joint ``i``
+        exerts the torque ``-damping_i (omega_i - omega_(i-1))`` (joint 1 ties
+        link 1 to the pivot). One number applies to every joint.
+    drive_amplitude : float
+        Amplitude ``A`` of the drive torque ``A cos(drive_frequency t)`` on
+        the first link, at the pivot [N m].
+    drive_frequency : float > 0, optional
+        Angular frequency of the drive [rad/s]; needed when
+        ``drive_amplitude != 0``.
+
+    Attributes
+    ----------
+    n : int
+        Number of links.
+    masses, lengths, damping : tuple of float
+    g, drive_amplitude : float
+    drive_frequency : float or None
+    chain : pendulum_lab.symbolic.mechanics.Chain
+        The symbolic equations (parameters symbolic); the forced chain when
+        there is damping or a drive.
+    """
+
+    def __init__(self, n: int, masses, lengths, g: float, *, damping=0.0,
+                 drive_amplitude: float = 0.0, drive_frequency: float | None = None):
+        self.n = check.integer_at_least("n", n, 1)
+        if self.n > MAX_LINKS:
+            raise ValueError(f"`n` must be at most {MAX_LINKS} links, got {self.n}: "
+                             f"{MAX_LINKS_REASON}")
+        self.masses = check.positive_vector("masses", masses, self.n)
+        self.lengths = check.positive_vector("lengths", lengths, self.n)
+        self.g = check.real_number("g", g)
+        self.damping = check.nonnegative_vector("damping", damping, self.n)
+        self.drive_amplitude = check.real_number("drive_amplitude", drive_amplitude)
+        self.drive_frequency = (None if drive_frequency is None
+                                else check.positive_number("drive_frequency", drive_frequency))
+        if self.drive_amplitude != 0 and self.drive_frequency is None:
+            raise ValueError("`drive_frequency` must be given (> 0) when `drive_amplitude` != 0")
+        self.forced = not (self.is_conservative and self.is_autonomous)
+        self.chain = derive_chain(self.n, self.forced)
+        self._fn = compiled_chain(self.n, self.forced)
+        self._params = self._parameters(self.forced)
+
+    #: Shape of the parameters: ``()`` for one model; a
+    #: :class:`~pendulum_lab.model.ModelFamily` has one model per entry.
+    shape: tuple = ()
+
+    def _parameters(self, forced: bool) -> tuple:
+        """The numbers of ``Chain.parameters`` (of the forced chain if ``forced``)."""
+        params = (*self.masses, *self.lengths, self.g)
+        if forced:
+            params += (*self.damping, self.drive_amplitude, self.drive_frequency or 0.0)
+        return params
+
+    # ---- forces ------------------------------------------------------------
+    @property
+    def is_conservative(self) -> bool:
+        """No damping: the mechanical energy changes only by the drive's work."""
+        return not any(np.any(np.asarray(c) != 0) for c in self.damping)
+
+    @property
+    def is_autonomous(self) -> bool:
+        """No drive: the equations do not depend on time."""
+        return not np.any(np.asarray(self.drive_amplitude) != 0)
+
+    @property
+    def drive_period(self) -> float | None:
+        """``2 pi / drive_frequency`` [s], or None without a drive frequency."""
+        return None if self.drive_frequency is None else 2 * np.pi / self.drive_frequency
+
+    @property
+    def conformal_damping_rate(self):
+        """``gamma`` when damping makes ``dp/dt = -H_q - gamma p`` (a conformal field), else None.
+
+        Zero without damping. For one link the damping torque ``-c omega``
+        is ``-(c / (m l^2)) p``: conformal, with ``gamma = c / (m l^2)``. For
+        ``n >= 2`` joint damping gives ``dp/dt = -H_q - C M(theta)^-1 p``,
+        whose rate depends on ``theta``: not conformal, so None. (For a
+        :class:`~pendulum_lab.model.ModelFamily`, an array of its shape.)
+        """
+        if self.is_conservative:
+            return 0.0
+        if self.n > 1:
+            return None
+        # one link: M = m l^2 is constant
+        rate = self.damping[0] / self.mass_matrix_at(np.zeros(1))[..., 0, 0]
+        return float(rate) if np.ndim(rate) == 0 else rate
+
+    def replace(self, **changes) -> PendulumModel:
+        """A copy with some constructor arguments changed (``masses``, ``lengths``, ``g``,
+        ``damping``, ``drive_amplitude``, ``drive_frequency``).
+
+        Examples
+        --------
+        >>> import pendulum_lab as pl
+        >>> pl.driven_pendulum().replace(drive_amplitude=1.5).drive_amplitude
+        1.5
+        """
+        arguments = self._arguments()
+        unknown = set(changes) - set(arguments)
+        if unknown:
+            raise ValueError(f"cannot replace {sorted(unknown)}: the arguments are "
+                             f"{list(arguments)}")
+        return PendulumModel(self.n, **(arguments | changes))
+
+    def _arguments(self) -> dict:
+        """The constructor's arguments after ``n``."""
+        return dict(masses=self.masses, lengths=self.lengths, g=self.g, damping=self.damping,
+                    drive_amplitude=self.drive_amplitude, drive_frequency=self.drive_frequency)
+
+    def __reduce__(self):
+        # Pickled as its constructor call (for Dask workers, see pendulum_lab.driver.cluster): the
+        # compiled functions it holds cannot be pickled, and a worker builds its own.
+        return functools.partial(PendulumModel, self.n, **self._arguments()), ()
+
+    def family(self, **values):
+        """Copies of this model, one per entry of an array of parameter values.
+
+        Parameters
+        ----------
+        **values : array_like
+            Values of ``damping``, ``drive_amplitude``, ``drive_frequency``
+            or ``g`` (one number per member; several arrays broadcast
+            against each other).
+
+        Returns
+        -------
+        pendulum_lab.model.ModelFamily
+            Give it to :func:`~pendulum_lab.simulate` with an ensemble of
+            initial states whose shape its shape broadcasts to: member ``k``
+            runs with its own parameters, all in one run.
+
+        Examples
+        --------
+        >>> import pendulum_lab as pl
+        >>> family = pl.driven_pendulum().family(drive_amplitude=[1.0, 1.2, 1.5])
+        >>> family.shape, family.drive_amplitude.tolist()
+        ((3,), [1.0, 1.2, 1.5])
+        """
+        return ModelFamily(self, values)
+
+    def for_ensemble(self, batch_shape: tuple) -> PendulumModel:
+        """The model of each member of a flattened ensemble of ``batch_shape``: this one.
+
+        A :class:`~pendulum_lab.model.ModelFamily` answers with its members
+        broadcast to ``batch_shape`` and flattened, one per row of the run.
+        """
+        return self
+
+    # ---- symbolic views (parameters symbolic) -----------------------------
+    @property
+    def lagrangian(self) -> sp.Expr:
+        return self.chain.lagrangian
+
+    @property
+    def hamiltonian(self) -> sp.Expr:
+        """``H(q, p)``; built on first access (it needs ``M^-1``)."""
+        return self.chain.hamiltonian
+
+    @property
+    def mass_matrix(self) -> sp.Matrix:
+        return self.chain.mass_matrix
+
+    @property
+    def forcing(self) -> sp.Matrix:
+        return self.chain.forcing
+
+    @property
+    def parameter_values(self) -> dict:
+        """``{symbol: value}`` for substituting this model's numbers into the symbolic forms."""
+        return dict(zip(self.chain.parameters, self._params))
+
+    @property
+    def separable(self) -> bool:
+        """True when ``H = T(p) + V(q)`` (constant mass matrix: the simple pendulum)."""
+        return self._fn.separable
+
+    # ---- numeric functions -------------------------------------------------
+    def _time(self, t):
+        """``t`` as floats; it may be left out only when the equations do not depend on it."""
+        if t is None:
+            if not self.is_autonomous:
+                raise ValueError("`t` is required: the model is driven, so its equations "
+                                 "depend on the time")
+            return 0.0
+        t = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(t)):
+            raise ValueError("`t` must be finite")
+        return t
+
+    def mass_matrix_at(self, theta) -> np.ndarray:
+        """``M(theta)``, shape ``(..., n, n)``."""
+        return self._fn.mass_matrix(theta, self._params)
+
+    def accelerations(self, theta, omega, t=None) -> np.ndarray:
+        """``omega' = M(theta)^-1 (F(theta, omega) + Q(omega, t))``, shape ``(..., n)``.
+
+        ``t`` (a float, or an array of the batch shape ``...``) is needed for a
+        driven model only.
+        """
+        return self._fn.accelerations(theta, omega, self._params, self._time(t))
+
+    def generalized_forces(self, theta, omega, t=None) -> np.ndarray:
+        """``Q(omega, t)``: joint damping and drive torques, shape ``(..., n)``; 0 if unforced."""
+        return self._fn.generalized_forces(theta, omega, self._params, self._time(t))
+
+    def vector_field(self, theta, p, t=None) -> tuple[np.ndarray, np.ndarray]:
+        """``(dtheta/dt, dp/dt) = (dH/dp, -dH/dq + Q)`` in canonical variables, each ``(..., n)``.
+
+        The right-hand side every integrator integrates (the compiled kernels
+        compute the same). ``t`` is needed for a driven model only.
+        """
+        omega = self.velocities(theta, p)
+        return omega, (self._fn.dlagrangian_dq(theta, omega, self._params)
+                       + self._fn.generalized_forces(theta, omega, self._params, self._time(t)))
+
+    def momenta(self, theta, omega) -> np.ndarray:
+        """``p = M(theta) omega``."""
+        return self._fn.momenta(theta, omega, self._params)
+
+    def velocities(self, theta, p) -> np.ndarray:
+        """``omega = M(theta)^-1 p`` (this is ``dH/dp``)."""
+        return self._fn.velocities(theta, p, self._params)
+
+    def kinetic_energy(self, theta, omega) -> np.ndarray:
+        return self._fn.kinetic(theta, omega, self._params)
+
+    def potential_energy(self, theta) -> np.ndarray:
+        """Potential energy, zero at the pivot's height."""
+        return self._fn.potential(theta, self._params)
+
+    def energy(self, theta, omega) -> np.ndarray:
+        return self.kinetic_energy(theta, omega) + self.potential_energy(theta)
+
+    # Hamilton's equations in canonical variables. dH/dq at fixed p equals
+    # -dL/dq at omega = M^-1 p (a property of the Legendre transform), which
+    # avoids differentiating a symbolic inverse. H is the mechanical energy:
+    # the forces Q of a forced model are not in it (see vector_field).
+    def dH_dp(self, theta, p) -> np.ndarray:
+        return self.velocities(theta, p)
+
+    def dH_dq(self, theta, p) -> np.ndarray:
+        return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p), self._params)
+
+    def hamiltonian_value(self, theta, p) -> np.ndarray:
+        """``H(theta, p)`` evaluated numerically."""
+        return self.energy(theta, self.velocities(theta, p))
+
+    def jacobian(self, theta, p, t=None) -> np.ndarray:
+        """Jacobian of :meth:`vector_field` with respect to ``(theta, p)``, shape ``(..., 2n, 2n)``.
+
+        With ``omega = M^-1 p``: ``d omega/dp = M^-1``,
+        ``d omega/dq = -M^-1 d(M omega)/dq``, and ``-dH/dq = dL/dq(q, omega)``
+        differentiates by the chain rule. The damping force ``-C omega`` adds
+        ``-C`` to ``d(dp/dt)/d omega``; the drive depends on ``t`` only.
+        """
+        self._time(t)  # a driven model's field depends on t (its Jacobian does not)
+        theta = np.asarray(theta, float)
+        mass = self.mass_matrix_at(theta)
+        omega = solve_small(mass, np.asarray(p, float))
+        args = (theta, omega, self._params)
+        inv_mass = np.linalg.inv(mass)
+        dw_dq = -inv_mass @ self._fn.dmomenta_dq(*args)
+        rate_w = self._fn.lag_qw(*args)  # d(dp/dt)/d omega
+        if not self.is_conservative:
+            rate_w = rate_w - self._fn.damping_matrix(self._params)
+        top = np.concatenate([dw_dq, inv_mass], axis=-1)
+        bottom = np.concatenate([self._fn.lag_qq(*args) + rate_w @ dw_dq, rate_w @ inv_mass], -1)
+        return np.concatenate([top, bottom], axis=-2)
+
+    def positions(self, theta) -> tuple[np.ndarray, np.ndarray]:
+        """Cartesian bob positions ``(x, y)``, each shape ``(..., n)``, pivot at the origin."""
+        theta = np.asarray(theta, float)
+        lengths = np.stack(np.broadcast_arrays(*self.lengths), axis=-1)
+        return (np.cumsum(lengths * np.sin(theta), axis=-1),
+                -np.cumsum(lengths * np.cos(theta), axis=-1))
+
+    def __repr__(self) -> str:
+        forces = ""
+        if self.forced:
+            forces = (f", damping={self.damping}, drive_amplitude={self.drive_amplitude}, "
+                      f"drive_frequency={self.drive_frequency}")
+        return (f"PendulumModel(n={self.n}, masses={self.masses}, lengths={self.lengths}, "
+                f"g={self.g}{forces})")
+
+
+#: The parameters a family can vary (one number per member).
+FAMILY_PARAMETERS = ("damping", "drive_amplitude", "drive_frequency", "g")
+
+
+class ModelFamily(PendulumModel):
+    """Models differing only in the values of some parameters, one per entry of ``shape``.
+
+    Build one with :meth:`PendulumModel.family`. Its parameter attributes
+    (``damping``, ``drive_amplitude``, ``g``, ...) are arrays of ``shape``;
+    the numeric functions of :class:`~pendulum_lab.PendulumModel` broadcast
+    them against the state, whose batch shape must end in a shape that
+    ``shape`` broadcasts to.
+
+    Every member is validated as a model of its own (a negative damping is a
+    ``ValueError`` naming ``damping``). If any member has damping or a drive,
+    all members use the forced equations (where the forces vanish they add
+    exactly zero).
+
+    Attributes
+    ----------
+    base : PendulumModel
+        The model whose parameters are varied.
+    values : dict
+        ``{name: ndarray of shape}``, the varied parameters.
+    shape : tuple
+    """
+
+    def __init__(self, base: PendulumModel, values: dict):
+        require_model(base)
+        if isinstance(base, ModelFamily):
+            raise TypeError("`model` is already a ModelFamily; vary its `base` instead")
+        if not values:
+            raise ValueError(f"name at least one parameter to vary, among {FAMILY_PARAMETERS}")
+        arrays = {}
+        for name, value in values.items():
+            if name not in FAMILY_PARAMETERS:
+                raise ValueError(f"a family cannot vary {name!r}: the parameters it can vary "
+                                 f"are {list(FAMILY_PARAMETERS)}")
+            arrays[name] = check.real_array(name, value)
+        try:
+            shape = np.broadcast_shapes(*(a.shape for a in arrays.values()))
+        except ValueError:
+            shapes = {k: a.shape for k, a in arrays.items()}
+            raise ValueError(f"the arrays of values must broadcast together, got "
+                             f"{shapes}") from None
+        arrays = {k: np.broadcast_to(a, shape) for k, a in arrays.items()}
+        # Each member is a model of its own: the factories' checks apply to every value.
+        members = [base.replace(**{k: float(a[index]) for k, a in arrays.items()})
+                   for index in np.ndindex(shape)]
+        forced = any(m.forced for m in members)
+        rows = np.array([m._parameters(forced) for m in members], dtype=float)
+        self._setup(base, arrays, forced, tuple(rows.T.reshape(-1, *shape)),
+                    has_frequency=all(m.drive_frequency is not None for m in members))
+
+    def _setup(self, base, values, forced, params, has_frequency):
+        self.base, self.n, self.forced = base, base.n, forced
+        self.values = values
+        self.chain = derive_chain(self.n, forced)
+        self._fn = compiled_chain(self.n, forced)
+        self._params = params
+        self._has_frequency = has_frequency
+
+    def __reduce__(self):
+        # Pickled as the base model and the values (for Dask workers, as PendulumModel is).
+        return ModelFamily, (self.base, dict(self.values))
+
+    def _mapped(self, transform) -> ModelFamily:
+        """A family with ``transform`` (an array -> array function) applied to every array."""
+        family = object.__new__(ModelFamily)
+        family._setup(self.base, {k: transform(a) for k, a in self.values.items()}, self.forced,
+                      tuple(transform(a) for a in self._params), self._has_frequency)
+        return family
+
+    # ---- parameters as arrays ------------------------------------------------
+    @property
+    def shape(self) -> tuple:
+        return self._params[0].shape
+
+    @property
+    def masses(self) -> tuple:
+        return self._params[: self.n]
+
+    @property
+    def lengths(self) -> tuple:
+        return self._params[self.n : 2 * self.n]
+
+    @property
+    def g(self) -> np.ndarray:
+        return self._params[2 * self.n]
+
+    @property
+    def damping(self) -> tuple:
+        if not self.forced:
+            return (np.zeros(self.shape),) * self.n
+        return self._params[2 * self.n + 1 : 3 * self.n + 1]
+
+    @property
+    def drive_amplitude(self) -> np.ndarray:
+        return self._params[3 * self.n + 1] if self.forced else np.zeros(self.shape)
+
+    @property
+    def drive_frequency(self) -> np.ndarray | None:
+        if not self._has_frequency:
+            return None
+        if not self.forced:
+            return np.broadcast_to(float(self.base.drive_frequency), self.shape)
+        return self._params[3 * self.n + 2]
+
+    # ---- members -------------------------------------------------------------
+    def __len__(self) -> int:
+        return int(np.prod(self.shape))
+
+    def member(self, index) -> PendulumModel:
+        """The member at ``index`` (an index into ``shape``) as a model of its own."""
+        return self.base.replace(**{k: float(a[index]) for k, a in self.values.items()})
+
+    def select(self, index) -> ModelFamily:
+        """The members ``self.values[...][index]`` (NumPy indexing: a mask, a slice)."""
+        return self._mapped(lambda a: a[index])
+
+    def for_ensemble(self, batch_shape: tuple) -> ModelFamily:
+        """The members broadcast to an ensemble of ``batch_shape`` and flattened.
+
+        Raises
+        ------
+        ValueError
+            If the family's shape does not broadcast to ``batch_shape``.
+        """
+        batch_shape = tuple(batch_shape)
+        try:
+            fits = np.broadcast_shapes(self.shape, batch_shape) == batch_shape
+        except ValueError:
+            fits = False
+        if not fits:
+            raise ValueError(
+                f"the model family has shape {self.shape}, which must broadcast to the ensemble "
+                f"shape of the initial state, {batch_shape} (`theta0` of shape (..., n))")
+        return self._mapped(lambda a: np.broadcast_to(a, batch_shape).reshape(-1))
+
+    def replace(self, **changes) -> ModelFamily:
+        """The same family of a base model with some constructor arguments changed."""
+        return ModelFamily(self.base.replace(**changes), self.values)
+
+    def family(self, **values):
+        raise TypeError("`model` is already a ModelFamily; vary its `base` instead")
+
+    def __repr__(self) -> str:
+        return f"ModelFamily({self.base!r}, varying {list(self.values)} over shape {self.shape})"
+
+
+def simple_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> PendulumModel:
+    """A simple pendulum: one point mass on a massless rod.
+
+    Examples
+    --------
+    >>> sp_ = simple_pendulum(length=2.0)
+    >>> float(sp_.accelerations([np.pi / 2], [0.0])[0])
+    -4.905
+    """
+    return PendulumModel(1, (check.positive_number("mass", mass),),
+                         (check.positive_number("length", length),), g)
+
+
+def driven_pendulum(damping: float = 0.5, drive_amplitude: float = 1.2,
+                    drive_frequency: float = 2 / 3, mass: float = 1.0, length: float = 1.0,
+                    g: float = 1.0) -> PendulumModel:
+    """The damped, driven simple pendulum.
+
+    ``m l^2 theta'' + damping theta' + m g l sin(theta) = drive_amplitude cos(drive_frequency t)``.
+    With ``m = l = g = 1`` (the defaults) this is the dimensionless form of
+    Baker and Gollub, with quality factor ``q = 1 / damping``; the defaults
+    (``q = 2``, amplitude 1.2, frequency 2/3) lie in its chaotic range.
+    ``damping = drive_amplitude = 0`` gives the conservative simple pendulum.
+
+    Parameters
+    ----------
+    damping : float >= 0
+        Viscous damping coefficient [N m s/rad].
+    drive_amplitude : float
+        Amplitude of the drive torque [N m].
+    drive_frequency : float > 0
+        Angular frequency of the drive [rad/s].
+    mass, length : float > 0
+    g : float
+
+    References
+    ----------
+    G. L. Baker, J. P. Gollub, *Chaotic Dynamics: An Introduction*, 2nd ed.,
+    Cambridge University Press 1996, ch. 3.
+
+    Examples
+    --------
+    >>> model = driven_pendulum()
+    >>> model.conformal_damping_rate, round(model.drive_period, 6)
+    (0.5, 9.424778)
+    >>> float(model.accelerations([0.0], [0.0], t=0.0)[0])  # the drive alone at t = 0
+    1.2
+    """
+    return PendulumModel(1, (check.positive_number("mass", mass),),
+                         (check.positive_number("length", length),), g, damping=damping,
+                         drive_amplitude=drive_amplitude, drive_frequency=drive_frequency)
+
+
+def double_pendulum(m1: float = 1.0, m2: float = 1.0, l1: float = 1.0, l2: float = 1.0,
+                    g: float = 9.81, *, damping=0.0, drive_amplitude: float = 0.0,
+                    drive_frequency: float | None = None) -> PendulumModel:
+    """A double pendulum with absolute angles ``theta_1``, ``theta_2`` from the vertical.
+
+    ``damping`` (one number for both joints, or one per joint),
+    ``drive_amplitude`` and ``drive_frequency`` add joint damping and a drive
+    torque at the pivot; see :class:`PendulumModel`.
+    """
+    masses = (check.positive_number("m1", m1), check.positive_number("m2", m2))
+    lengths = (check.positive_number("l1", l1), check.positive_number("l2", l2))
+    return PendulumModel(2, masses, lengths, g, damping=damping, drive_amplitude=drive_amplitude,
+                         drive_frequency=drive_frequency)
+
+
+def n_pendulum(n: int, masses=None, lengths=None, g: float = 9.81, *, damping=0.0,
+               drive_amplitude: float = 0.0, drive_frequency: float | None = None
+               ) -> PendulumModel:
+    """A chain of ``n`` pendulums; masses and lengths default to 1.
+
+    ``damping``, ``drive_amplitude`` and ``drive_frequency`` as for
+    :class:`PendulumModel`.
+    """
+    n = check.integer_at_least("n", n, 1)
+    return PendulumModel(n, (1.0,) * n if masses is None else masses,
+                         (1.0,) * n if lengths is None else lengths, g, damping=damping,
+                         drive_amplitude=drive_amplitude, drive_frequency=drive_frequency)
+
+
+def require_model(model, name: str = "model") -> PendulumModel:
+    """``model`` itself if it is a :class:`PendulumModel`, else a ``TypeError`` naming ``name``."""
+    if not isinstance(model, PendulumModel):
+        raise TypeError(
+            f"`{name}` must be a PendulumModel (from simple_pendulum, driven_pendulum, "
+            f"double_pendulum or n_pendulum), got {type(model).__name__}"
+        )
+    return model
+
+
+def require_double_pendulum(model) -> PendulumModel:
+    """``model`` itself if it is a :class:`PendulumModel` with two links."""
+    require_model(model)
+    if model.n != 2:
+        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    return model
