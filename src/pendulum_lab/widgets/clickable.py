@@ -72,7 +72,8 @@ __all__ = [
     "section_reach",
 ]
 
-#: The format of the Poincare section's energy, on its slider and in its title and messages.
+#: The format of the Poincare section's energy on its slider (its values are whole steps of
+#: :data:`ENERGY_STEP`, so the readout shows the value the title and messages state).
 ENERGY_FORMAT = ".1f"
 #: Step of the Poincare section's energy slider [J].
 ENERGY_STEP = 0.5
@@ -373,7 +374,7 @@ class SectionExplorer(ClickExplorer):
         return float(self.controls["energy"].value)
 
     def describe_view(self, view: tuple) -> str:
-        return f"E = {view[0]:{ENERGY_FORMAT}} J"
+        return f"E = {view[0]:g} J"
 
     def _draw_background(self, ax) -> None:
         theta2 = np.linspace(-np.pi, np.pi, 721)
