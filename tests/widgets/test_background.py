@@ -101,6 +101,31 @@ def test_data_below_the_ticks_and_grid_is_drawn_under_them(monkeypatch):
     assert not np.array_equal(cached, full)
 
 
+def test_only_the_pieces_from_the_first_change_on_are_drawn_again():
+    figure = Figure(figsize=(6, 3), dpi=50)
+    canvas = FigureCanvasAgg(figure)
+    ax = figure.add_subplot()
+    ax.set_title("a title")
+    (line,) = ax.plot([0, 1], [0, 1])
+    cache = background.BackgroundCache(figure, canvas)
+    frame, _ = background.split(ax)
+    assert frame[:3] == [ax.patch, ax.xaxis, ax.yaxis] and len(frame) == 6  # and 3 titles
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 6
+    line.set_ydata([0, 3])  # new y limits and ticks; x unchanged
+    ax.relim()
+    ax.autoscale_view()
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 6 + 4  # y axis and titles
+    line.set_xdata([0, 2])  # now x as well: from the x axis on
+    ax.relim()
+    ax.autoscale_view()
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 10 + 5
+    cached, full = cached_and_full(figure, canvas, cache)  # nothing changed
+    assert np.array_equal(cached, full) and cache.pieces_drawn == 15 and cache.hits == 1
+
+
 def test_only_the_frames_that_changed_are_drawn_again():
     figure = Figure(figsize=(6, 3), dpi=50)
     canvas = FigureCanvasAgg(figure)

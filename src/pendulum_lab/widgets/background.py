@@ -3,14 +3,15 @@
 Most of an explorer's redraw is text: tick labels, axis labels, titles. While
 a slider moves, the frame around a panel's data (its axes, ticks and labels)
 often stays as it was. :class:`BackgroundCache` keeps each axes' frame as
-pixels and draws it again only when one of its pieces changes
-(:func:`piece_key`). It uses matplotlib's documented blitting API (see
-matplotlib's guide "Faster rendering by using blitting"): a frame is drawn
-by :meth:`Axes.draw <matplotlib.axes.Axes.draw>` over the empty figure with
-the panel's data marked animated (:meth:`~matplotlib.artist.Artist.set_animated`),
-kept with ``canvas.copy_from_bbox`` and pasted back with
-``canvas.restore_region``; the data are then painted over the frames with
-:meth:`~matplotlib.axes.Axes.draw_artist`, in the order of a full draw. While
+pixels and draws it again only from the first of its pieces (patch, x axis,
+y axis, titles) whose :func:`piece_key` changed. It uses matplotlib's
+documented blitting API (see matplotlib's guide "Faster rendering by using
+blitting"): each piece is drawn by :meth:`Axes.draw <matplotlib.axes.Axes.draw>`
+over the picture of the pieces before it, with the rest of the axes marked
+animated (:meth:`~matplotlib.artist.Artist.set_animated`) and the patch
+hidden; pictures are kept with ``canvas.copy_from_bbox`` and pasted back
+with ``canvas.restore_region``; the data are then painted over the frames
+with :meth:`~matplotlib.axes.Axes.draw_artist`, in the order of a full draw. While
 the frames' rectangles do not touch, the picture is the same pixel for pixel
 as a full draw (the tests compare them); when they do, or for a figure this
 scheme does not cover (overlapping axes, figure-level artists, a layout
@@ -195,37 +196,51 @@ def _disjoint(boxes: list[tuple[slice, slice]]) -> bool:
 
 
 @contextmanager
-def _animated(artists: list):
-    """Mark ``artists`` animated (a draw of their axes leaves them out), then unmark them."""
-    for artist in artists:
+def _alone(ax: Axes, piece, others: list):
+    """Leave everything of ``ax`` but ``piece`` out of a draw of ``ax``.
+
+    The ``others`` are marked animated (a draw of their axes skips them), and
+    the patch, which :meth:`Axes.draw` draws first whatever its state, hidden
+    unless it is the piece. Both are set back afterwards.
+    """
+    patch_shown = ax.patch.get_visible()
+    marked = [a for a in others if a is not piece and a is not ax.patch]
+    for artist in marked:
         artist.set_animated(True)
+    if piece is not ax.patch:
+        ax.patch.set_visible(False)
     try:
         yield
     finally:
-        for artist in artists:
+        ax.patch.set_visible(patch_shown)
+        for artist in marked:
             artist.set_animated(False)
 
 
 class BackgroundCache:
-    """Render ``figure`` on ``canvas``, reusing each axes' frame while its pieces hold.
+    """Render ``figure`` on ``canvas``, reusing the pieces of each axes' frame that hold.
 
-    A frame is the axes drawn over the blank figure with its foreground
-    (:func:`split`) marked animated; it is kept while the :func:`piece_key` of
-    every piece of it is unchanged. A render pastes the frames into the blank
-    and draws every foreground over them, in the order of a full draw.
-    ``hits`` counts the frames reused, ``misses`` those drawn anew (one of
-    the two per axes and render), ``full`` the renders drawn in full.
+    A frame is drawn piece by piece (:func:`split`, :func:`piece_key`) over
+    the blank, keeping the picture after each piece: each piece is drawn by
+    :meth:`Axes.draw` with the rest of its axes left out (marked animated, as
+    matplotlib's blitting guide does), so it lands where a full draw puts it
+    (a title above top tick labels, say). When a piece changes, the picture
+    before it is taken up again and the rest drawn over it, in the order of a
+    full draw. A render pastes the frames into the blank and draws every
+    foreground over them. ``hits`` counts the frames reused whole, ``misses``
+    those with a piece drawn anew (one of the two per axes and render),
+    ``pieces_drawn`` the pieces drawn, ``full`` the renders drawn in full.
     """
 
     def __init__(self, figure: Figure, canvas: FigureCanvasAgg):
         self.figure, self.canvas = figure, canvas
-        self.hits = self.misses = self.full = 0
+        self.hits = self.misses = self.pieces_drawn = self.full = 0
         self._figure_key = self._blank = self._blank_pixels = None  # set up by the first render
-        self._keys, self._frames = [], []
+        self._pieces, self._frames = [], []
 
     def clear(self) -> None:
         """Forget every frame (the next render draws them anew)."""
-        self._keys = [None] * len(self._keys)
+        self._pieces = [[] for _ in self._pieces]
 
     def render(self) -> None:
         """Draw the figure into the canvas's pixels (call inside any ``rc_context`` needed)."""
@@ -244,13 +259,15 @@ class BackgroundCache:
             frame, front = split(ax)
             layers.append((ax, front))
             keys = [piece_key(ax, artist) for artist in frame]
-            if keys == self._keys[k] and self._frames[k] is not None:
+            cached = self._pieces[k]
+            same = 0
+            while same < min(len(keys), len(cached)) and cached[same][0] == keys[same]:
+                same += 1
+            if same == len(keys) == len(cached) and self._frames[k] is not None:
                 self.hits += 1
             else:
                 self.misses += 1
-                self._frames[k] = self._draw_frame(ax, front)
-                # After the draw: drawing places the titles (above top tick labels, say).
-                self._keys[k] = [piece_key(ax, artist) for artist in frame]
+                self._frames[k] = self._draw_frame(k, ax, frame, front, same)
         if not _disjoint([box for box, _ in self._frames]):
             self._draw_in_full()  # frames that touch: a full draw puts one over the other
             return
@@ -279,17 +296,24 @@ class BackgroundCache:
                 ax.set_visible(True)
         self._blank = self.canvas.copy_from_bbox(figure.bbox)
         self._blank_pixels = np.array(self.canvas.buffer_rgba())
-        self._keys = [None] * len(figure.axes)
+        self._pieces = [[] for _ in figure.axes]
         self._frames = [None] * len(figure.axes)
         self._figure_key = _figure_key(figure)
 
-    def _draw_frame(self, ax: Axes, front: list):
-        """Draw the frame of ``ax`` alone over the blank; return where it lies (row and column
-        slices) and its pixels there (a region for ``restore_region``)."""
-        canvas = self.canvas
-        canvas.restore_region(self._blank)
-        with _animated(front):
-            self.figure.draw_artist(ax)
+    def _draw_frame(self, k: int, ax: Axes, frame: list, front: list, same: int):
+        """Draw the pieces of the frame of axes ``k`` from ``same`` on over the picture of
+        those before; return where the frame lies (row and column slices) and its pixels
+        there (a region for ``restore_region``)."""
+        canvas, pieces = self.canvas, self._pieces[k]
+        del pieces[same:]
+        canvas.restore_region(pieces[-1][1] if pieces else self._blank)
+        everything = [*frame, *front]
+        for piece in frame[same:]:
+            with _alone(ax, piece, everything):
+                self.figure.draw_artist(ax)
+            self.pieces_drawn += 1
+            # The key after the draw: drawing places the titles.
+            pieces.append((piece_key(ax, piece), canvas.copy_from_bbox(self.figure.bbox)))
         pixels = np.asarray(canvas.buffer_rgba())
         rows, columns = _frame_box(ax, _changed_box(pixels, self._blank_pixels), pixels.shape)
         region = canvas.copy_from_bbox(_display_box(rows, columns, pixels.shape[0]))

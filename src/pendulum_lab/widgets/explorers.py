@@ -82,8 +82,8 @@ class Explorer(Instrument):
         )
         self._rows, self._cols = panel_grid(len(self.panels))
         super().__init__(model, controls, columns, rows=self._rows)
-        #: The pixels of the panels' frames, reused while they hold still (its ``hits`` and
-        #: ``misses`` count the frames reused and drawn anew).
+        #: The pixels of the panels' frames, reused while they hold still (its ``hits``,
+        #: ``misses`` and ``pieces_drawn`` count what was reused and what drawn anew).
         self.background = BackgroundCache(self.figure, self._canvas)
 
     def prepare(self) -> SimulateCall:
