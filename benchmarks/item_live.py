@@ -52,7 +52,7 @@ def timed(fn):
     fn()
     return time.process_time() - cpu, time.perf_counter() - wall
 
-contenders = {"update": sim.update, "recompute": lambda: simulate_controls(dp.n, sim.controls)}
+contenders = {"update": sim.update, "recompute": lambda: simulate_controls(dp, sim.controls)}
 samples = {name: [] for name in contenders}
 names = list(contenders)
 for r in range(ROUNDS):

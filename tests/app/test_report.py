@@ -274,7 +274,9 @@ def test_plot_order_shows_the_points_and_each_fitted_slope():
         pl.simple_pendulum(), [1.0], [0.0], t_end=1.0, dts=analysis.ORDER_DTS, method="rk4"
     )
     ax = plotting.plot_order(result).axes[0]
-    assert [t.get_text() for t in ax.get_legend().get_texts()] == [f"rk4: slope {result.slope:.2f}"]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        f"rk4, simple pendulum: slope {result.slope:.2f}"
+    ]
     points, fit = ax.lines
     assert np.array_equal(points.get_xdata(), result.dts)
     assert np.array_equal(points.get_ydata(), result.errors)

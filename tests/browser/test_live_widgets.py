@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import time
 from pathlib import Path
 
@@ -37,6 +38,10 @@ def lab(tmp_path_factory):
     requests: list[str] = []
     try:
         runner.start()
+        # "Copy as code" writes to the clipboard, and the tests read it back.
+        runner.context.grant_permissions(
+            ["clipboard-read", "clipboard-write"], origin=runner.server.url
+        )
         runner.context.on("request", lambda request: requests.append(request.url))
         run = runner.get(NOTEBOOK)
         yield runner, run, requests
@@ -105,6 +110,35 @@ def press(page, selector: str, *keys: str) -> None:
     page.evaluate("(s) => document.querySelector(s).focus()", selector)
     for key in keys:
         page.keyboard.press(key)
+
+
+def kernel_output(page, code: str) -> str:
+    """What ``code`` prints, run in the demo's kernel (beside the cells, not in one)."""
+    return page.evaluate(
+        """async ([path, code]) => {
+            const kernel = window.__plab.panel(path).sessionContext.session.kernel;
+            const future = kernel.requestExecute({ code, store_history: false });
+            let out = "";
+            future.onIOPub = (msg) => {
+                if (msg.header.msg_type === "stream") out += msg.content.text;
+                if (msg.header.msg_type === "error") out += "ERROR " + msg.content.evalue;
+            };
+            await future.done;
+            return out;
+        }""",
+        [NOTEBOOK, code],
+    )
+
+
+def description(page) -> str:
+    return page.locator(f"{SIM} .plab-description").first.text_content()
+
+
+def numbers_in(text: str, *names: str) -> list[float]:
+    """The values of ``name = value`` pairs in a description (U+2212 read as a minus)."""
+    text = text.replace("\u2212", "-")
+    return [float(re.search(rf"{re.escape(name.replace(chr(0x2212), '-'))} = (-?[0-9.e+-]+)",
+                            text).group(1).rstrip(".")) for name in names]
 
 
 def test_the_demo_runs_cleanly(lab, page):
@@ -179,6 +213,96 @@ def test_keyboard_steps_and_changes_speed(page):
     wait_data(page, SIM, "playing", "v === '0'")
     # The keys went to the widget, not to JupyterLab ("k" selects the cell above).
     assert page.evaluate(active_cell) == cell_before
+
+
+def test_the_live_region_describes_the_state_shown(page):
+    region = page.locator(f"{SIM} .plab-description").first
+    assert region.get_attribute("aria-live") == "polite"
+    press(page, SIM, "Home")
+    wait_data(page, SIM, "playing", "v === '0'")
+    page.wait_for_function(
+        "(s) => document.querySelector(s + ' .plab-description').textContent"
+        ".startsWith('Paused at t = 0.00 s')", arg=SIM)
+    press(page, SIM, "ArrowRight", "ArrowRight")
+    page.wait_for_function(
+        "(s) => document.querySelector(s + ' .plab-description').textContent"
+        ".startsWith('Paused at t = 0.02 s')", arg=SIM)
+    text = description(page)
+    assert "of 60.0 s (glrk4, Δt = 0.01 s)" in text and "energy error E − E(0)" in text
+    kinetic, potential, total, error = numbers_in(
+        text, "Kinetic energy T", "potential energy V", "total E", "E − E(0)")
+    # The kernel's run at the state shown (step 2: saved states are 10 ms apart).
+    truth = json.loads(kernel_output(page, (
+        "import json; tr = sim.trajectory\n"
+        "print(json.dumps([float(tr.kinetic[2]), float(tr.potential[2]), float(tr.energy[2]),"
+        " float(tr.energy_error[2])]))")))
+    assert [kinetic, potential, total] == pytest.approx(truth[:3], abs=1.5e-3)
+    assert error == pytest.approx(truth[3], rel=2e-2, abs=1e-12)
+    # Playing is announced once, not frame by frame; pausing describes the new moment.
+    press(page, SIM, "Space")
+    page.wait_for_function(
+        "(s) => document.querySelector(s + ' .plab-description').textContent"
+        ".startsWith('Playing at 1× speed')", arg=SIM)
+    page.wait_for_timeout(600)
+    assert description(page).startswith("Playing at 1× speed from t = 0.02 s")
+    press(page, SIM, "Space")
+    page.wait_for_function(
+        "(s) => { const t = document.querySelector(s + ' .plab-description').textContent;"
+        " return t.startsWith('Paused at') && !t.startsWith('Paused at t = 0.02 s'); }",
+        arg=SIM)
+
+
+def test_copy_as_code_puts_the_runs_simulate_call_on_the_clipboard(page):
+    import numpy as np
+
+    cell = page.locator(SIM).first.locator("xpath=ancestor::div[contains(@class,'jp-Cell')]")
+    line = cell.locator(".plab-statusline").first
+    assert line.get_attribute("data-code") == "1"
+    line.locator("button", has_text="Copy as code").click()
+    page.wait_for_function(
+        "(c) => c.dataset.copied === '1'", arg=line.element_handle(), timeout=10_000)
+    code = page.evaluate("() => navigator.clipboard.readText()")
+    assert "pl.simulate(model, " in code and "method='glrk4'" in code
+    # The copied code, run here, computes the kernel's run number for number.
+    namespace: dict = {}
+    exec(compile(code, "<clipboard>", "exec"), namespace)  # noqa: S102 - the code under test
+    ours = namespace["traj"]
+    theirs = json.loads(kernel_output(page, (
+        "import json; tr = sim.trajectory\n"
+        "print(json.dumps([tr.theta[-1].tolist(), tr.omega[-1].tolist(), len(tr.t)]))")))
+    assert ours.theta[-1].tolist() == theirs[0] and ours.omega[-1].tolist() == theirs[1]
+    assert len(ours.t) == theirs[2] == 6001
+    # And it is the run the canvas plays: its first state.
+    press(page, SIM, "Home")
+    wait_data(page, SIM, "time", "Number(v) === 0")
+    shown = [float(v) for v in data(page, SIM)["theta"].split(",")]
+    np.testing.assert_allclose(shown, ours.theta[0], atol=1e-5)
+
+
+def test_the_explorer_is_keyboard_operable_and_announces_each_run(page):
+    explorer = page.locator(".jp-Cell").filter(has=page.locator(".widget-image")).last
+    explorer.scroll_into_view_if_needed()
+    status = explorer.locator(".plab-statusline .plab-status-text").first
+    assert status.get_attribute("role") == "status"
+    before = status.text_content()
+    active_cell = "() => window.jupyterapp.shell.currentWidget.content.activeCellIndex"
+    handle = explorer.locator(".widget-slider").first.locator(".noUi-handle").first
+    handle.focus()  # (focus inside a cell makes it JupyterLab's active cell)
+    cell_before = page.evaluate(active_cell)
+    # θ₁ one step (0.01 rad) up, from the keyboard alone; in JupyterLab's command mode the
+    # same key would select the cell above.
+    page.keyboard.press("ArrowUp")
+    readout = explorer.locator(".widget-slider").first.locator(".widget-readout").first
+    page.wait_for_function("(r) => r.textContent.trim() === '2.010'", arg=readout.element_handle())
+    page.wait_for_function(
+        "([s, b]) => s.textContent !== b && !s.closest('.plab-statusline').dataset.kind"
+        ".startsWith('busy')", arg=[status.element_handle(), before], timeout=30_000)
+    text = status.text_content()
+    assert text.startswith("500 steps of rk4") and "max |E − E(0)|" in text
+    reported = json.loads(kernel_output(page, "import json; print(json.dumps(float("
+                                              "ex.trajectory.theta[0, 0])))"))
+    assert reported == pytest.approx(2.01, abs=1e-12)
+    assert page.evaluate(active_cell) == cell_before  # the key stayed with the slider
 
 
 def drag_bob(page, bob: int, to: tuple[float, float]) -> float:

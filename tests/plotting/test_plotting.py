@@ -104,11 +104,31 @@ def test_phase_portrait_separatrix_is_the_saddle_level():
 
 def test_phase_portrait_overlays_a_trajectory_and_rejects_chains(rotating):
     fig = plotting.plot_phase_portrait(SP, trajectory=rotating)
-    traj_line = [ln for ln in fig.axes[0].lines if ln.get_label() == "trajectory"][0]
-    y = np.asarray(traj_line.get_ydata(), dtype=float)
-    np.testing.assert_allclose(y[np.isfinite(y)], rotating.omega[:, 0])
+    (curve,) = [c for c in fig.axes[0].collections if c.get_label().startswith("trajectory")]
+    segments = curve.get_segments()
+    # Every step is a segment but those across the wrap at +-pi (a rotation crosses it).
+    starts = np.array([segment[0] for segment in segments])
+    wrapped = plotting.wrap_angle(rotating.theta[:, 0])
+    crossings = int(np.sum(np.abs(np.diff(wrapped)) > np.pi))
+    assert crossings > 0 and len(segments) == len(rotating.t) - 1 - crossings
+    assert set(np.round(starts[:, 1], 12)) <= set(np.round(rotating.omega[:-1, 0], 12))
     with pytest.raises(ValueError, match="simple pendulum"):
         plotting.plot_phase_portrait(DP)
+
+
+def test_a_long_orbit_is_coloured_by_time_from_dark_to_light():
+    # Explicit Euler spirals out over many turns: one colour would fill the plane; a colour
+    # by time shows where the orbit was when.
+    run = pl.simulate(SP, [1.0], [0.0], t_end=60.0, dt=0.01, method="explicit_euler")
+    fig = plotting.plot_phase_portrait(SP, trajectory=run)
+    (curve,) = [c for c in fig.axes[0].collections if c.get_label().startswith("trajectory")]
+    colours = curve.get_colors()
+    brightness = colours[:, :3].mean(axis=1)
+    # (A curve in one colour, as the portrait drew before, fails this.)
+    assert len(colours) > 1000 and brightness[-1] > brightness[0] + 0.3
+    # The colour follows the time: late segments lighter than early ones, all the way.
+    quarters = [q.mean() for q in np.array_split(brightness, 4)]
+    assert quarters == sorted(quarters)
 
 
 def test_draw_pendulum_puts_bobs_at_the_model_positions():

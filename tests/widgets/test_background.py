@@ -126,6 +126,60 @@ def test_only_the_pieces_from_the_first_change_on_are_drawn_again():
     assert np.array_equal(cached, full) and cache.pieces_drawn == 15 and cache.hits == 1
 
 
+def test_only_the_frames_that_changed_are_drawn_again():
+    figure = Figure(figsize=(6, 3), dpi=50)
+    canvas = FigureCanvasAgg(figure)
+    left, right = figure.subplots(1, 2)
+    figure.subplots_adjust(wspace=0.5)
+    left.set_title("a title")
+    (line,) = left.plot([0, 1], [0, 1])
+    right.plot([0, 1], [1, 0])
+    cache = background.BackgroundCache(figure, canvas)
+    frame, _ = background.split(left)
+    assert frame[:3] == [left.patch, left.xaxis, left.yaxis] and len(frame) == 6  # and 3 titles
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and (cache.misses, cache.hits) == (2, 0)
+    line.set_ydata([0, 3])  # new y limits and ticks on the left; the right unchanged
+    left.relim()
+    left.autoscale_view()
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and (cache.misses, cache.hits) == (3, 1)
+    left.set_title("another title")  # a title is a piece of its frame too
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and (cache.misses, cache.hits) == (4, 2)
+    cached, full = cached_and_full(figure, canvas, cache)  # nothing changed
+    assert np.array_equal(cached, full) and (cache.misses, cache.hits) == (4, 4)
+    cache.clear()
+    cached, full = cached_and_full(figure, canvas, cache)
+    assert np.array_equal(cached, full) and (cache.misses, cache.hits) == (6, 4)
+
+
+def test_titles_are_placed_as_a_full_draw_places_them():
+    # With the x ticks on top, matplotlib lifts an automatically placed title above their
+    # labels when it draws the axes; the cached frame must show it there too.
+    def figure_with_title(**title):
+        figure = Figure(figsize=(4, 3), dpi=50)
+        canvas = FigureCanvasAgg(figure)
+        ax = figure.add_axes([0.15, 0.1, 0.7, 0.6])
+        ax.xaxis.tick_top()
+        ax.set_title("above the ticks", **title)
+        ax.plot([0, 1], [0, 1])
+        return figure, canvas
+
+    figure, canvas = figure_with_title()
+    cache = background.BackgroundCache(figure, canvas)
+    for _ in range(2):  # drawn anew, then reused
+        cached, full = cached_and_full(figure, canvas, cache)
+        assert np.array_equal(cached, full)
+    assert cache.misses >= 1 and cache.hits >= 1 and cache.full == 0
+    # Control: the same title left where it was set (y = 1) is drawn elsewhere, so the
+    # comparison above sees where the title goes.
+    figure, canvas = figure_with_title(y=1.0)
+    with mpl.rc_context(UNHINTED):
+        canvas.draw()
+    assert not np.array_equal(np.array(canvas.buffer_rgba()), full)
+
+
 def test_frames_that_touch_are_drawn_in_full():
     figure = Figure(figsize=(6, 3), dpi=50)
     canvas = FigureCanvasAgg(figure)

@@ -219,13 +219,23 @@ def test_a_drag_sets_the_initial_state_at_rest_and_recomputes_once(sim):
     assert sim.view.run == run + 3
 
 
-def test_a_bad_drag_keeps_the_previous_motion(sim):
+def test_a_bad_drag_from_code_raises_and_leaves_the_simulator_as_it_was(sim):
     previous, run = sim.trajectory, sim.view.run
-    theta_before = sim.controls["theta1"].value
-    assert not sim.drag(0, float("nan"), 0.3)
+    theta_before, message_before = sim.controls["theta1"].value, sim.message
+    with pytest.raises(ValueError, match="`x` must be finite"):
+        sim.drag(0, float("nan"), 0.3)
     assert sim.trajectory is previous and sim.view.run == run
     assert sim.controls["theta1"].value == theta_before
-    assert sim.view.message_kind == "error"
+    # Nothing red is left in the widget: the refusal belongs to the caller's cell.
+    assert sim.message == message_before and sim.status.kind == "info"
+    assert sim.view.message == "" and sim.view.message_kind == "info"
+
+
+def test_a_bad_drag_in_the_browser_says_why_in_the_widget(sim):
+    previous, run = sim.trajectory, sim.view.run
+    sim.view._dispatch(sim.view, {"type": "release", "bob": 0, "x": None, "y": 0.3}, [])
+    assert sim.trajectory is previous and sim.view.run == run
+    assert sim.view.message_kind == "error" and sim.status.kind == "error"
     assert "`x` must be finite" in sim.view.message and "previous motion" in sim.view.message
 
 
@@ -268,7 +278,7 @@ def test_display_carries_a_picture_of_the_whole_run(sim):
 
 # --------------------------------------------------------------------------- the package
 def test_front_end_modules_ship_with_the_package_and_fetch_nothing():
-    for name in ("simulator.js", "clickable.js", "live.css"):
+    for name in ("simulator.js", "clickable.js", "status.js", "live.css"):
         text = (channel.STATIC / name).read_text(encoding="utf-8")
         assert not re.search(r"https?://", text), f"{name} names a URL"
         assert not re.search(r"^\s*import\s", text, re.MULTILINE), f"{name} imports a module"

@@ -73,8 +73,8 @@ def test_angle_slider_recomputes_and_redraws(dp_explorer):
 def test_set_controls_changes_several_and_recomputes_once(dp_explorer, monkeypatch):
     ex = dp_explorer
     computed = []
-    compute = ex.compute
-    monkeypatch.setattr(ex, "compute", lambda: computed.append(1) or compute())
+    prepare = ex.prepare
+    monkeypatch.setattr(ex, "prepare", lambda: computed.append(1) or prepare())
     assert ex.set_controls({"theta1": 0.4, "theta2": -0.3, "omega1": 1.0})
     assert len(computed) == 1
     np.testing.assert_array_equal(ex.trajectory.theta[0], [0.4, -0.3])
@@ -305,8 +305,12 @@ def test_energy_explorer_range():
     with pytest.raises(ValueError, match="energy"):
         widgets.explore_energy(dp, energy=depth + 1.0)
     ex = widgets.explore_energy(dp, t_end=1.0)
-    assert ex.controls["energy"].max == pytest.approx(depth)
-    assert ex.controls["energy"].min > -depth
+    energy = ex.controls["energy"]
+    # The range's ends are whole steps, as close to the upright and hanging chain as that
+    # allows (so that every value the slider takes reads as it is).
+    assert depth - energy.step < energy.max <= depth
+    assert -depth < energy.min <= -depth + 2 * energy.step
+    assert (energy.min / energy.step) == pytest.approx(round(energy.min / energy.step))
 
 
 def _pixels(explorer) -> np.ndarray:

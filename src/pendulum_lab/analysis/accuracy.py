@@ -105,12 +105,14 @@ def final_state_at(traj: Trajectory, t_end: float) -> tuple[np.ndarray, np.ndarr
 
 @dataclass(frozen=True)
 class OrderResult:
-    """Errors at the final time for a sequence of step sizes, and the fitted slope."""
+    """Errors at the final time for a sequence of step sizes, and the fitted slope; ``model``
+    is the pendulum they were measured on (a figure's legend names it)."""
 
     dts: np.ndarray
     errors: np.ndarray
     slope: float
     method: str
+    model: PendulumModel | None = None
 
 
 def observed_order(model: PendulumModel, theta0, omega0=None, *, t_end: float = 1.0,
@@ -152,7 +154,7 @@ def observed_order(model: PendulumModel, theta0, omega0=None, *, t_end: float = 
         errors.append(global_error(*final_state_at(traj, t_end), reference))
     errors = np.asarray(errors)
     slope = float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
-    return OrderResult(dts, errors, slope, method.name)
+    return OrderResult(dts, errors, slope, method.name, model)
 
 
 def energy_growth(traj: Trajectory, fraction: float = 0.1) -> tuple[float, float]:

@@ -9,12 +9,13 @@ import numpy as np
 
 from ..model.pendulum import PendulumModel
 from ..plotting.scene import FPS, TRAIL, PendulumScene, encode_frame, frame_indices
+from ..widgets.calls import SimulateCall
 from ..widgets.controls import (
     SIMULATOR_T_END,
     SPEEDS,
     build_simulator,
+    call_from_controls,
     pendulum_controls,
-    simulate_controls,
 )
 from ..widgets.instrument import Instrument
 from .export import html_animation, save_animation
@@ -98,8 +99,8 @@ class Simulator(Instrument):
         self.widget.children = (boxes, playback, status, readout, image)
 
     # ---- the explorer's hooks --------------------------------------------------------------
-    def compute(self):
-        return simulate_controls(self.model.n, self.controls)
+    def prepare(self) -> SimulateCall:
+        return call_from_controls(self.model, self.controls)
 
     def draw(self, figure):
         self.scene = PendulumScene(figure, self.model, self.trajectory, self.trail, readout=False)

@@ -53,7 +53,7 @@ def plot_lyapunov(estimate, ax: Axes | None = None, label=None, **kwargs) -> Fig
     lines = ax.semilogx(estimate.t, estimate.running.reshape(len(estimate.t), -1), **kwargs)
     lines[0].set_label(label)
     ax.axhline(0.0, color="0.6", lw=0.8)
-    ax.set(xlabel=axis_label("t"), ylabel="running estimate of lambda_1 (1/s)")
+    ax.set(xlabel=axis_label("t"), ylabel="running estimate of λ₁ (1/s)")
     ax.legend(fontsize="small")
     return ax.figure
 
@@ -77,7 +77,7 @@ def plot_lyapunov_energy(scan, ax: Axes | None = None) -> Figure:
     ax.errorbar(energy, mean, yerr=error, color="C3", marker="o", ms=4, capsize=3,
                 label="mean over the chaotic orbits")
     ax.axhline(scan.threshold, color="0.6", lw=0.8, ls="--")
-    ax.set(xlabel="energy E (J)", ylabel=f"lambda_1 after {scan.t_end:g} s (1/s)",
+    ax.set(xlabel="energy E (J)", ylabel=f"λ₁ after {scan.t_end:g} s (1/s)",
            title=f"{scan.method}, dt = {scan.dt:g} s; dashed: regular below "
                  f"{scan.threshold:g} 1/s")
     ax.legend(fontsize="small")
@@ -91,8 +91,8 @@ def plot_landing_errors(errors, ax: Axes | None = None, **kwargs) -> Figure:
     kwargs.setdefault("label", f"{errors.landing}, {errors.method}, dt = {errors.dt:g} s")
     ax.loglog(errors.speed[order], errors.state_error[order], "o-", ms=4, **kwargs)
     ax.xaxis.set_minor_formatter(NullFormatter())  # a short range labels its minor ticks
-    ax.set(xlabel="speed of the crossing |theta' of the surface's link| (rad/s)",
-           ylabel="distance from the exact crossing")
+    ax.set(xlabel="speed of the crossing, |θ′| of the surface's link (rad/s)",
+           ylabel="distance from the exact crossing in (θ, p)")
     ax.legend(fontsize="small")
     return ax.figure
 
@@ -175,7 +175,7 @@ def plot_flip_map(flip_map, ax: Axes | None = None, colorbar: bool = True) -> Fi
         vmin=0,
         vmax=1,
     )
-    ax.set(xlabel="theta1(0) (rad)", ylabel="theta2(0) (rad)")
+    ax.set(xlabel="θ₁(0) (rad)", ylabel="θ₂(0) (rad)")
     if colorbar:
         ax.figure.colorbar(image, ax=ax, label="flip time (s)")
     return ax.figure
@@ -188,9 +188,9 @@ def plot_small_angle(comparison, ax: Axes | None = None, member=()) -> Figure:
     full = comparison.theta_full[(slice(None), *member)]
     linear = comparison.theta_linear[(slice(None), *member)]
     for i in range(full.shape[-1]):
-        line = ax.plot(comparison.t, full[:, i], label=f"theta{i + 1} full")[0]
+        line = ax.plot(comparison.t, full[:, i], label=f"θ{subscript(i + 1)} full")[0]
         ax.plot(comparison.t, linear[:, i], "--", color=line.get_color(),
-                label=f"theta{i + 1} linearised")
+                label=f"θ{subscript(i + 1)} linearised")
     parting = np.asarray(comparison.parting_time)[member]
     if np.isfinite(parting):
         ax.axvline(parting, color="k", lw=0.8, ls=":", label="they part")
@@ -225,7 +225,7 @@ def plot_parting(comparison, amplitudes, ax: Axes | None = None) -> Figure:
             np.exp(offset) * amplitudes[parted] ** slope,
             "--",
             color="0.4",
-            label=f"fit: time ~ amplitude^{slope:.2f}",
+            label=f"fit: time ∝ amplitude^{slope:.2f}",
         )
     ax.set(xlabel="release amplitude (rad)", ylabel="parting time (s)")
     ax.legend(fontsize="small")
@@ -245,9 +245,9 @@ def plot_lyapunov_spectrum(spectrum, ax: Axes | None = None, member=(), **kwargs
         raise ValueError(f"`member` must pick one member of the ensemble shape "
                          f"{spectrum.running.shape[1:-1]}, got {member}")
     for i in range(running.shape[-1]):
-        ax.semilogx(spectrum.t, running[:, i], label=f"lambda{subscript(i + 1)}", **kwargs)
+        ax.semilogx(spectrum.t, running[:, i], label=f"λ{subscript(i + 1)}", **kwargs)
     ax.semilogx(spectrum.t, running.sum(axis=-1), ":", color="k", label="sum")
     ax.axhline(0.0, color="0.6", lw=0.8)
-    ax.set(xlabel="t (s)", ylabel="running estimate (1/s)")
+    ax.set(xlabel=axis_label("t"), ylabel="running estimate (1/s)")
     ax.legend(fontsize="small", ncol=2)
     return ax.figure

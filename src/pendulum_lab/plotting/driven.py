@@ -12,9 +12,16 @@ from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
-from .figures import get_axes, new_figure, subscript
+from .figures import axis_label, get_axes, new_figure, subscript
 
-__all__ = ["plot_basins", "plot_bifurcation", "plot_orbit_branches", "plot_stroboscopic"]
+__all__ = ["doubling_labels", "plot_basins", "plot_bifurcation", "plot_orbit_branches",
+           "plot_stroboscopic"]
+
+#: Units of the parameters a bifurcation diagram sweeps.
+PARAMETER_UNITS = {"drive_amplitude": "N m", "drive_frequency": "rad/s",
+                   "damping": "N m s/rad", "g": "m/s²", "masses": "kg", "lengths": "m"}
+#: Doublings closer than this fraction of the swept range share one label.
+LABEL_ROOM = 0.06
 
 # Colours of basins (attractor 0, 1, ...); "none settled" is light grey.
 BASIN_COLOURS = ("#9ecae1", "#fdae6b", "#a1d99b", "#bcbddc", "#fdd0a2", "#c7e9c0")
@@ -35,7 +42,8 @@ def plot_stroboscopic(section, ax: Axes | None = None, link: int = 0, member=Non
     ax.scatter(theta.ravel(), omega.ravel(), s=s, c=kwargs.pop("c", "k"), linewidths=0,
                **kwargs)
     label = subscript(link + 1) if section.theta.shape[-1] > 1 else ""
-    ax.set(xlabel=f"theta{label} (rad)", ylabel=f"omega{label} (rad/s)", xlim=(-np.pi, np.pi))
+    ax.set(xlabel=axis_label("theta", label), ylabel=axis_label("omega", label),
+           xlim=(-np.pi, np.pi))
     ax.set_title(f"once per drive period ({len(section.t)} periods)", fontsize="medium")
     return ax.figure
 
@@ -46,7 +54,9 @@ def plot_bifurcation(diagram, ax: Axes | None = None, lyapunov=None,
 
     Every stroboscopic sample is a dot above its parameter value. With
     ``mark_doublings``, a dashed line marks each period doubling found in
-    the data (at the first value with the doubled period). With
+    the data (at the first value with the doubled period), labelled with
+    the periods; doublings too close to be labelled apart share one label
+    (:func:`doubling_labels`), such as "2→4→8" where they cascade. With
     ``lyapunov`` (a ``LyapunovSpectrum`` or ``LyapunovEstimate`` whose
     ensemble shape starts with the diagram's values), a second panel below
     shows the largest exponent on the same axis.
@@ -65,17 +75,20 @@ def plot_bifurcation(diagram, ax: Axes | None = None, lyapunov=None,
     values = np.broadcast_to(diagram.values[None, :, None], points.shape)
     ax.scatter(values.ravel(), points.ravel(), s=s, c="k", linewidths=0, rasterized=True)
     link = subscript(diagram.link + 1) if diagram.theta.shape[-1] > 1 else ""
-    unit = "rad/s" if diagram.variable == "omega" else "rad"
-    ax.set(ylabel=f"{diagram.variable}{link} once per period ({unit})")
+    symbol, unit = ("ω", "rad/s") if diagram.variable == "omega" else ("θ", "rad")
+    ax.set(ylabel=f"{symbol}{link} once per period ({unit})")
     if mark_doublings:
-        for k, doubling in enumerate(diagram.doublings()):
+        doublings = diagram.doublings()
+        for doubling in doublings:
             for each in axes:
                 each.axvline(doubling.value, color="tab:red", lw=0.8, ls="--")
-            # staggered, so that labels of close doublings do not overlap
-            ax.annotate(f"{doubling.period}\u2192{2 * doubling.period}", (doubling.value, 1.0),
-                        xycoords=("data", "axes fraction"), xytext=(2, -10 - 9 * (k % 3)),
-                        textcoords="offset points", fontsize="x-small", color="tab:red")
-        if diagram.doublings():
+        span = float(np.ptp(diagram.values)) if len(diagram.values) > 1 else 1.0
+        for k, (value, text) in enumerate(doubling_labels(doublings, LABEL_ROOM * span)):
+            # Neighbouring labels on two levels, so that a long one does not run into the next.
+            ax.annotate(text, (value, 1.0), xycoords=("data", "axes fraction"),
+                        xytext=(2, -10 - 9 * (k % 2)), textcoords="offset points",
+                        fontsize="x-small", color="tab:red")
+        if doublings:
             ax.set_title("dashed: period doublings found in the data", fontsize="small",
                          color="tab:red")
     if lyapunov is not None:
@@ -88,9 +101,41 @@ def plot_bifurcation(diagram, ax: Axes | None = None, lyapunov=None,
         largest = largest.reshape(len(diagram.values), -1)
         axes[1].plot(diagram.values, largest, ".", ms=2, color="tab:blue")
         axes[1].axhline(0.0, color="0.4", lw=0.8)
-        axes[1].set(ylabel="lambda\u2081 (1/s)")
-    axes[-1].set(xlabel=diagram.parameter.replace("_", " "))
+        axes[1].set(ylabel="λ₁ (1/s)")
+    unit = PARAMETER_UNITS.get(diagram.parameter)
+    axes[-1].set(xlabel=diagram.parameter.replace("_", " ") + (f" ({unit})" if unit else ""))
     return ax.figure
+
+
+def doubling_labels(doublings, room: float) -> list[tuple[float, str]]:
+    """One label per group of doublings closer than ``room``: ``(where, text)`` pairs.
+
+    A group starts at a doubling more than ``room`` (in parameter units)
+    beyond the first of the group before; its text lists the periods, as one
+    cascade ``"2→4→8"`` when each doubles the period of the one before, else
+    ``"1→2, 4→8"``.
+
+    Examples
+    --------
+    >>> from pendulum_lab.chaos import PeriodDoubling as D
+    >>> doubling_labels([D(1, 1.0, 1.01), D(2, 1.05, 1.06), D(4, 1.07, 1.071)], room=0.05)
+    [(1.01, '1→2'), (1.06, '2→4→8')]
+    """
+    groups: list[list] = []
+    for doubling in sorted(doublings, key=lambda d: d.value):
+        if groups and doubling.value - groups[-1][0].value <= room:
+            groups[-1].append(doubling)
+        else:
+            groups.append([doubling])
+    labels = []
+    for group in groups:
+        cascade = all(b.period == 2 * a.period for a, b in zip(group, group[1:]))
+        if cascade:
+            text = "→".join(str(p) for p in [group[0].period, *(2 * d.period for d in group)])
+        else:
+            text = ", ".join(f"{d.period}→{2 * d.period}" for d in group)
+        labels.append((group[0].value, text))
+    return labels
 
 
 def plot_basins(basins, ax: Axes | None = None, s: float = 30.0) -> Figure:
@@ -110,7 +155,7 @@ def plot_basins(basins, ax: Axes | None = None, s: float = 30.0) -> Figure:
                    color=BASIN_COLOURS[k % len(BASIN_COLOURS)], edgecolors="k", zorder=3,
                    label=f"attractor {k}: period {len(points)}, {basins.turns[k]:+g} turns "
                          f"per period, {basins.fractions[k]:.0%} of starts")
-    ax.set(xlabel="theta(0) (rad)", ylabel="omega(0) (rad/s)")
+    ax.set(xlabel="θ(0) (rad)", ylabel="ω(0) (rad/s)")
     ax.legend(fontsize="small", loc="upper right")
     return ax.figure
 

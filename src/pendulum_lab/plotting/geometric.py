@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.ticker import NullFormatter
 
 from ..geometric.standard_map import FLUX_EXPONENT, GREENE_K
-from .figures import axis_label, get_axes, get_axes_grid, subscript
+from .figures import axis_label, get_axes, get_axes_grid, subscript, superscript
 
 __all__ = [
     "plot_adaptive_energy",
@@ -212,7 +212,7 @@ def plot_modified_energy_orders(result, ax=None):
     ax = get_axes(ax)
     for k, errors, slope, expected in zip(result.orders, result.errors, result.slopes,
                                           result.expected):
-        name = "H" if k == 0 else rf"$\tilde H$ to $h^{k}$"
+        name = "H" if k == 0 else f"modified H to h{superscript(k)}"
         ax.loglog(result.dts, errors, marker="o",
                   label=f"{name}: slope {slope:.2f} (theory {expected})")
     ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short decades
@@ -228,7 +228,7 @@ def plot_energy_drift(result, ax=None):
     ax = get_axes(ax)
     ax.loglog(result.dts, np.abs(result.measured), "o", label="measured (fit over the run)")
     ax.loglog(result.dts, np.abs(result.predicted), "-",
-              label=rf"predicted, $\propto h^{result.power}$")
+              label=f"predicted, ∝ h{superscript(result.power)}")
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(axis_label("step"))
     ax.set_ylabel("|dE/dt| (J/s)")
@@ -337,7 +337,7 @@ def plot_adaptive_energy(runs, ax=None, envelope=False):
         else:
             ax.plot(run.t, run.energy_error, lw=0.8, label=label)
     ax.set_xlabel(axis_label("t"))
-    ax.set_ylabel("largest |H - H(0)| so far (J)" if envelope else "H - H(0) (J)")
+    ax.set_ylabel("largest |H − H(0)| so far (J)" if envelope else "H − H(0) (J)")
     ax.legend(fontsize=8)
     return ax.figure
 

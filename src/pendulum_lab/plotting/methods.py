@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 
 from .. import validation as check
 from ..analysis import AdaptiveRun, EnergyComparison, OrderResult
-from .figures import axis_label, get_axes
+from .figures import axis_label, get_axes, pendulum_name
 
 __all__ = [
     "plot_amplification",
@@ -63,7 +63,7 @@ def plot_energy_error_growth(runs, ax: Axes | None = None, labels=None) -> Figur
             style = "--" if run.method.variables == "velocity" else "-"
         ax.plot(run.t[1:], np.where(worst > 0, worst, np.nan), style, lw=1.4, label=label)
     ax.set_yscale("log")
-    ax.set(xlabel=axis_label("t"), ylabel="largest |E(s) - E(0)| for s <= t (J)")
+    ax.set(xlabel=axis_label("t"), ylabel="largest |E(s) − E(0)| for s ≤ t (J)")
     ax.legend(fontsize="small", ncols=2)
     return ax.figure
 
@@ -126,22 +126,24 @@ def plot_order(results, ax: Axes | None = None) -> Figure:
     -------
     matplotlib.figure.Figure
         Markers are the measured errors, dashed lines the least-squares fits
-        ``log(error) = slope log(dt) + c``; the legend gives each slope.
+        ``log(error) = slope log(dt) + c``; the legend gives each method, the
+        pendulum it was measured on and its slope.
     """
     if isinstance(results, OrderResult):
         results = [results]
     ax = get_axes(ax, width=6.0, height=4.2)
     for result in results:
         slope, intercept = np.polyfit(np.log(result.dts), np.log(result.errors), 1)
+        where = "" if result.model is None else f", {pendulum_name(result.model)}"
         line = ax.loglog(
-            result.dts, result.errors, "o", label=f"{result.method}: slope {slope:.2f}"
+            result.dts, result.errors, "o", label=f"{result.method}{where}: slope {slope:.2f}"
         )[0]
         ax.loglog(
             result.dts, np.exp(intercept) * result.dts**slope, "--", lw=1, color=line.get_color()
         )
     ax.set(
-        xlabel="step size dt (s)",
-        ylabel="error at the final time",
+        xlabel="step Δt (s)",
+        ylabel="error at t_end, max over θ (rad), ω (rad/s)",
         title="Observed order of accuracy",
     )
     ax.legend(fontsize="small")
@@ -181,8 +183,8 @@ def plot_work_precision(points, x: str = "wall_time", ax: Axes | None = None,
         )
     ax.set(
         xlabel="wall time (s)" if x == "wall_time" else "vector-field evaluations",
-        ylabel="max |E - E(0)| (J)" if y == "energy_error"
-        else "global error at T, max |(theta, omega) - reference|",
+        ylabel="max |E − E(0)| (J)" if y == "energy_error"
+        else "global error at T, max |(θ, ω) − reference| (rad, rad/s)",
     )
     ax.legend(fontsize="small")
     return ax.figure
@@ -207,7 +209,7 @@ def plot_energy_comparison(comparison: EnergyComparison, ax: Axes | None = None)
     for name, traj in comparison.trajectories.items():
         err = np.abs(traj.relative_energy_error)
         ax.semilogy(traj.t, np.where(err > 0, err, np.nan), label=name, lw=1)
-    ax.set(xlabel=axis_label("t"), ylabel="|E - E(0)| / |E(0)|")
+    ax.set(xlabel=axis_label("t"), ylabel="|E − E(0)| / |E(0)|")
     ax.legend(fontsize="small")
     return ax.figure
 
@@ -231,7 +233,7 @@ def plot_stage_contraction(iterations, ax: Axes | None = None, label: str = "") 
     predicted = np.array([it.predicted for it in iterations])
     dots = ax.loglog(dts, measured, "o", label=f"measured{', ' + label if label else ''}")[0]
     ax.loglog(dts, predicted, "-", color=dots.get_color(), lw=1.0,
-              label=f"h rho(A) rho(df/dy){', ' + label if label else ''}")
+              label=f"h ρ(A) ρ(∂f/∂y){', ' + label if label else ''}")
     ax.set(xlabel="step h (s)", ylabel="contraction per sweep")
     ax.legend(fontsize="small")
     return ax.figure

@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import math
 
+import matplotlib as mpl
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -28,6 +29,7 @@ from .trajectories import chain_frame
 __all__ = [
     "BOB_COLOUR",
     "EXPORT_SIZE",
+    "MIN_TEXT_PIXELS",
     "TRAIL",
     "FPS",
     "RUN_COLOURS",
@@ -47,6 +49,9 @@ FPS = 20
 TRAIL = 2.0
 #: Size of the exported animations' figure [inches].
 EXPORT_SIZE = (9, 3.6)
+#: Smallest height of the exports' text [pixels of the frame]: at a low ``dpi`` the text is
+#: set larger than matplotlib's default so that it stays legible.
+MIN_TEXT_PIXELS = 11
 TRAIL_COLOUR = "tab:purple"
 BOB_COLOUR = "tab:red"
 #: One colour per run when a scene overlays several (chain, trail and energies of that run).
@@ -183,6 +188,10 @@ class PendulumScene:
         simulator shows them in a widget instead: text is slow to draw).
     labels : sequence of str, optional
         The runs' names in the legend (several runs only); see :func:`scene_runs`.
+    font_size : float, optional
+        Size of every text of the scene [points]; by default matplotlib's
+        ``font.size``. The exports pass a size that stays legible at their
+        resolution (:data:`MIN_TEXT_PIXELS`).
 
     Attributes
     ----------
@@ -208,6 +217,7 @@ class PendulumScene:
         animated: bool = True,
         readout: bool = True,
         labels=None,
+        font_size: float | None = None,
     ):
         runs, self.labels = scene_runs(traj, labels)
         for run in runs:
@@ -223,14 +233,18 @@ class PendulumScene:
         spacing = self.traj.t[1] - self.traj.t[0] if len(self.traj.t) > 1 else 1.0
         self._trail_states = int(round(trail / spacing))
         self.index = 0
-
+        size = float(mpl.rcParams["font.size"]) if font_size is None else float(font_size)
+        # Room above the panels for the readout and the legend: two lines of text.
+        top = 1 - 3.6 * size / 72 / figure.get_figheight()
+        bottom = 3.4 * size / 72 / figure.get_figheight()  # tick labels and the axis label
         grid = figure.add_gridspec(
-            1, 2, width_ratios=(1, 1.6), left=0.07, right=0.98, bottom=0.15, top=0.86, wspace=0.2
+            1, 2, width_ratios=(1, 1.6), left=0.07, right=0.965, bottom=bottom, top=top,
+            wspace=0.2,
         )
         chain = figure.add_subplot(grid[0])
         chain_frame(chain, model, margin=1.08)
         titles = {_run_title(run) for run in runs}
-        chain.set_title(titles.pop() if len(titles) == 1 else "", fontsize="medium")
+        chain.set_title(titles.pop() if len(titles) == 1 else "", fontsize=size)
         bob_size = 10 * math.sqrt(min(model.masses) / max(model.masses))
         if len(runs) == 1:
             colours = [(TRAIL_COLOUR, "0.25", BOB_COLOUR)]
@@ -267,6 +281,9 @@ class PendulumScene:
                 styles["kinetic", k] = {"color": colour, "lw": 0.8, "alpha": 0.7}
                 styles["total", k] = {"color": colour, "lw": 2, "label": label}
                 energy.axhline(run.energy[0], color=colour, lw=0.6, ls=":")
+            # What the two widths mean, once for all runs.
+            energy.plot([], [], color="0.3", lw=2, label="total E")
+            energy.plot([], [], color="0.3", lw=0.8, label="kinetic T")
         levels = np.concatenate([*self._energies.values(), [run.energy[0] for run in runs]])
         low, high = float(np.min(levels)), float(np.max(levels))
         pad = 0.06 * max(high - low, 1e-9)
@@ -274,16 +291,23 @@ class PendulumScene:
             xlim=(0, max(self.traj.t[-1], 1e-9)),
             ylim=(low - pad, high + pad),
             xlabel="t (s)",
-            ylabel="energy (J)" if len(runs) == 1 else "E thick, T thin (J)",
+            ylabel="energy (J)",
         )
+        for ax in (chain, energy):
+            ax.tick_params(labelsize=0.9 * size)
+            ax.xaxis.label.set_fontsize(size)
+            ax.yaxis.label.set_fontsize(size)
         self.energy_lines = {key: energy.plot([], [], **styles[key])[0] for key in self._energies}
         energy.legend(
             loc="lower left",
             bbox_to_anchor=(0.0, 1.0),
-            ncols=4 if len(runs) == 1 else len(runs),
+            ncols=4 if len(runs) == 1 else len(runs) + 2,
             frameon=False,
-            fontsize="small",
+            fontsize=0.85 * size,
             borderaxespad=0.2,
+            handlelength=1.2,
+            handletextpad=0.4,
+            columnspacing=0.9,
         )
         # Blitting draws in this order: each run's trail, rods, bobs; a later run over an earlier.
         self.artists = [
@@ -293,7 +317,7 @@ class PendulumScene:
         self.readout = None
         if readout:
             self.readout = figure.text(
-                0.5, 0.985, " ", ha="center", va="top", family="monospace", fontsize="medium"
+                0.5, 0.985, " ", ha="center", va="top", family="monospace", fontsize=size
             )
             self.artists.append(self.readout)
         for artist in self.artists:
@@ -358,10 +382,14 @@ def check_run(traj, model) -> Trajectory:
 def export_scene(
     traj, model, trail: float, dpi: float, labels=None, animated: bool = True
 ) -> tuple[Figure, PendulumScene]:
-    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the runs' scene."""
+    """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the runs' scene, its
+    text at least :data:`MIN_TEXT_PIXELS` high."""
     figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
     FigureCanvasAgg(figure)
-    return figure, PendulumScene(figure, model, traj, trail, animated=animated, labels=labels)
+    size = max(float(mpl.rcParams["font.size"]), MIN_TEXT_PIXELS * 72 / float(dpi))
+    scene = PendulumScene(figure, model, traj, trail, animated=animated, labels=labels,
+                          font_size=size)
+    return figure, scene
 
 
 def still_frame(

@@ -43,7 +43,10 @@ from .figures import (
     get_axes,
     link_label,
     new_figure,
+    plot_by_time,
     single_trajectory,
+    superscript,
+    wrap_angle,
 )
 
 __all__ = [
@@ -102,7 +105,7 @@ def plot_energy_error(traj: Trajectory, ax: Axes | None = None, relative: bool =
     ax.plot(traj.t, shown, color=TOTAL, lw=1)
     if np.any(np.isfinite(shown)):
         ax.set_yscale("log")
-    ylabel = "|E - E(0)| / |E(0)|" if relative else "|E - E(0)| (J)"
+    ylabel = "|E − E(0)| / |E(0)|" if relative else "|E − E(0)| (J)"
     ax.set(xlabel=axis_label("t"), ylabel=ylabel, title=f"Energy error ({traj.method.name})")
     return ax.figure
 
@@ -189,9 +192,12 @@ def plot_phase_portrait(
     Librations (closed curves around the bottom, ``E < m g l``) are blue,
     rotations (``E > m g l``) green, and the separatrix ``E = m g l`` through
     the upright saddle red. The center at ``(0, 0)`` and the saddles at
-    ``(+-pi, 0)`` are marked. A ``trajectory`` is drawn on top (thick, with its
-    start marked), its angles wrapped into ``(-pi, pi]``; the window grows
-    to hold all of it.
+    ``(+-pi, 0)`` are marked. A ``trajectory`` is drawn on top, its angles
+    wrapped into ``(-pi, pi]``, coloured by time from dark (its start, marked)
+    to light (:func:`~pendulum_lab.plotting.figures.plot_by_time`), so that a
+    long orbit winding many times stays readable; the window grows to hold all
+    of it. The level sets are those of ``H``: for a model with damping or a
+    drive its trajectory crosses them.
 
     Parameters
     ----------
@@ -255,9 +261,10 @@ def plot_phase_portrait(
     ax.plot([], [], color=ROTATION, label="rotation")
     ax.plot([], [], color=SEPARATRIX, lw=2, label="separatrix")
     if traj is not None:
-        x, y = broken_at_wraps(traj.theta[:, 0], traj.omega[:, 0])
-        ax.plot(x, y, color="black", lw=2.2, label="trajectory")
-        ax.plot(x[0], y[0], "o", color="gold", mec="black", ms=9, zorder=5)
+        plot_by_time(ax, traj.t, traj.theta[:, 0], traj.omega[:, 0],
+                     label="trajectory (dark → light: time)")
+        ax.plot([wrap_angle(traj.theta[0, 0])], [traj.omega[0, 0]], "o", color="gold", mec="black",
+                ms=9, zorder=5)
     ax.set(
         xlabel=axis_label("theta"),
         ylabel=axis_label("omega"),
@@ -313,7 +320,7 @@ def plot_modified_level_sets(
     ax.plot(theta, p, ".", color="tab:red", ms=4, zorder=3)
     ax.plot([], [], "--", color="0.45", label="level set of H")
     ax.plot([], [], color="tab:blue",
-            label=f"level set of the modified H (terms to h^{modified.order})")
+            label=f"level set of the modified H (terms to h{superscript(modified.order)})")
     ax.plot([], [], ".", color="tab:red", label=f"{traj.method.name}, h = {traj.dt:g} s")
     ax.set(xlabel="θ (rad)", ylabel="p (kg m²/s)",
            title="The numerical orbit lies on a level set of the modified energy")
@@ -442,18 +449,18 @@ def plot_period_vs_amplitude(
         dense,
         exact_period(model, dense),
         color="black",
-        label=r"exact $4\sqrt{l/g}\,K(\sin^2(\theta_0/2))$",
+        label="exact 4 √(l/g) K(sin²(θ₀/2))",
     )
     ax.axhline(
         2 * np.pi * np.sqrt(model.lengths[0] / model.g),
         color="0.5",
         ls="--",
-        label=r"small angle $2\pi\sqrt{l/g}$",
+        label="small angle 2π √(l/g)",
     )
     ax.plot(amplitudes, measured, "o", color="tab:red", label="measured (simulation)")
     upper = 1.3 * float(np.max(measured))
     ax.set(
-        xlabel=r"amplitude $\theta_0$ (rad)",
+        xlabel="amplitude θ₀ (rad)",
         ylabel="period (s)",
         ylim=(0, upper),
         title="Period against amplitude",
@@ -496,6 +503,9 @@ def _panel_energy(ax, traj, model):
 
 def _panel_energy_error(ax, traj, model):
     plot_energy_error(traj, ax=ax)
+    if not (model.is_conservative and model.is_autonomous):
+        # The model's forces change its energy: the curve is their work, not an error alone.
+        ax.set_title(f"Energy change ({traj.method.name}; not conserved)")
 
 
 def _panel_angles(ax, traj, model):

@@ -18,7 +18,8 @@ draw them; nothing is fetched from a CDN):
 
 * :func:`live_simulator` -- the course's simulator: the pendulum played at
   the display's frame rate, energy bars and the energy-error trace, drag a
-  bob to restart from there, keyboard controls.
+  bob to restart from there, keyboard controls, and a description of the
+  state shown for screen readers.
 * :func:`section_explorer` -- a Poincare section of the double pendulum; a
   click launches the orbit through that point on the chosen energy surface.
 * :func:`portrait_explorer` -- the simple pendulum's phase portrait; a click
@@ -40,14 +41,32 @@ Invalid combinations (``t_end < dt``, too many steps, an implicit solver that
 does not converge) leave the last trajectory and figure in place and put a
 readable sentence in ``message`` instead of raising.
 
+Every instrument runs exactly the model it is given, damping and drive
+included, and offers only the methods :func:`pendulum_lab.simulate` accepts
+for it; where the model does not conserve energy, what is shown as
+``E - E(0)`` is called an energy change, not an error. The explorers built on
+energy levels (:func:`explore_energy`, :func:`section_explorer`) and on the
+conservative chain's linearisation (:func:`explore_equilibrium`) refuse a
+damped or driven model, saying why.
+
+Each instrument's status line (:class:`~pendulum_lab.widgets.status.StatusLine`)
+is an ARIA live region, says what a wait of more than half a second is
+doing (:meth:`Instrument.working`) while the figure is marked stale, and has
+a "Copy as code" button: the exact ``pl.simulate(...)`` call behind the
+picture (``code()``), which reproduces it number for number. In a notebook
+reopened without its kernel, each instrument's output shows a one-line hint
+to run its cell again instead of JupyterLab's "Error displaying widget".
+
 Layout: :mod:`.controls` (the sliders every instrument shares, also used by
-:mod:`pendulum_lab.animation`), :mod:`.instrument` (the machinery),
-:mod:`.explorers`, :mod:`.panels` (extra explorer panels); browser-drawn:
-:mod:`.channel` (binary messages to the browser), :mod:`.live` (the live
-simulator), :mod:`.clickable` (click to launch), ``static/`` (their ES
-modules and stylesheet).
+:mod:`pendulum_lab.animation`), :mod:`.calls` (the run behind a picture, as a
+value and as code), :mod:`.status` (the status line), :mod:`.instrument`
+(the machinery), :mod:`.explorers`, :mod:`.panels` (extra explorer panels);
+browser-drawn: :mod:`.channel` (binary messages to the browser), :mod:`.live`
+(the live simulator), :mod:`.clickable` (click to launch), ``static/`` (their
+ES modules and stylesheet).
 """
 
+from .calls import SimulateCall
 from .clickable import (
     PortraitExplorer,
     SectionExplorer,
@@ -67,6 +86,7 @@ from .explorers import (
 from .instrument import Instrument
 from .live import LiveSimulator, live_simulator
 from .panels import separation_panel
+from .status import StatusLine
 
 __all__ = [
     "DT_CHOICES",
@@ -78,6 +98,8 @@ __all__ = [
     "LiveSimulator",
     "PortraitExplorer",
     "SectionExplorer",
+    "SimulateCall",
+    "StatusLine",
     "explore",
     "explore_energy",
     "explore_equilibrium",

@@ -2,29 +2,36 @@
 
 Most of an explorer's redraw is text: tick labels, axis labels, titles. While
 a slider moves, the frame around a panel's data (its axes, ticks and labels)
-often stays as it was, or only one of its axes changes. :class:`BackgroundCache`
-draws each axes' frame alone over the empty figure, piece by piece (patch,
-x axis, y axis, titles), keeping the picture after each piece, and draws a
-piece again only when its :func:`piece_key` changes, over the picture of the
-pieces before it. A render pastes the frames into the empty figure and paints
-every panel's data over them in the order of a full draw. While the frames'
-rectangles do not touch, the picture is the same pixel for pixel as a full
-draw (the tests compare them); when they do, or for a figure this scheme
-does not cover (overlapping axes, figure-level artists, a layout engine),
-the figure is drawn in full.
+often stays as it was. :class:`BackgroundCache` keeps each axes' frame as
+pixels and draws it again only from the first of its pieces (patch, x axis,
+y axis, titles) whose :func:`piece_key` changed. It uses matplotlib's
+documented blitting API (see matplotlib's guide "Faster rendering by using
+blitting"): each piece is drawn by :meth:`Axes.draw <matplotlib.axes.Axes.draw>`
+over the picture of the pieces before it, with the rest of the axes marked
+animated (:meth:`~matplotlib.artist.Artist.set_animated`) and the patch
+hidden; pictures are kept with ``canvas.copy_from_bbox`` and pasted back
+with ``canvas.restore_region``; the data are then painted over the frames
+with :meth:`~matplotlib.axes.Axes.draw_artist`, in the order of a full draw. While
+the frames' rectangles do not touch, the picture is the same pixel for pixel
+as a full draw (the tests compare them); when they do, or for a figure this
+scheme does not cover (overlapping axes, figure-level artists, a layout
+engine), the figure is drawn in full.
 """
 
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from operator import attrgetter
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.text import Text
+from matplotlib.transforms import Bbox
 
-__all__ = ["BackgroundCache", "data_artists", "draw_order", "piece_key", "split"]
+__all__ = ["BackgroundCache", "data_artists", "draw_order", "piece_key", "split", "titles"]
 
 
 def data_artists(ax: Axes) -> list:
@@ -33,6 +40,11 @@ def data_artists(ax: Axes) -> list:
     if ax.get_legend() is not None:
         artists.append(ax.get_legend())
     return artists
+
+
+def titles(ax: Axes) -> list[Text]:
+    """The three titles of ``ax`` (centre, left, right): its texts that are not ``ax.texts``."""
+    return [a for a in ax.get_children() if isinstance(a, Text) and a not in ax.texts]
 
 
 def draw_order(ax: Axes) -> list:
@@ -71,7 +83,7 @@ def split(ax: Axes) -> tuple[list, list]:
     if not data:
         return order, []
     lowest = min(artist.get_zorder() for artist in data)
-    always_frame = {ax.patch, ax.title, ax._left_title, ax._right_title}  # first; outside
+    always_frame = {ax.patch, *titles(ax)}  # first; outside the clip box
     front = [a for a in order if a.get_zorder() >= lowest and a not in always_frame]
     shown = set(front)
     return [a for a in order if a not in shown], front
@@ -100,9 +112,9 @@ def piece_key(ax: Axes, artist) -> tuple:
 
     The axes' position and, for the patch its colours, for an axis object its
     view limits, scale, tick locations and labels, grid and label, for a
-    title its text. Any other artist gets a key equal to no other (its
-    pixels cannot be told from its properties here), so it and the pieces
-    after it are drawn anew on every render.
+    title its text and place. Any other artist gets a key equal to no other
+    (its pixels cannot be told from its properties here), so a frame holding
+    it is drawn anew on every render.
     """
     position = tuple(ax.get_position().bounds)
     if artist is ax.patch:
@@ -112,7 +124,7 @@ def piece_key(ax: Axes, artist) -> tuple:
         return ("x", position, tuple(map(float, ax.get_xlim())), _axis_key(artist))
     if artist is ax.yaxis:
         return ("y", position, tuple(map(float, ax.get_ylim())), _axis_key(artist))
-    if artist in (ax.title, ax._left_title, ax._right_title):
+    if artist in titles(ax):
         return ("title", position, _text_key(artist), tuple(artist.get_position()))
     return ("artist", object())
 
@@ -169,6 +181,11 @@ def _frame_box(ax: Axes, changed: tuple[slice, slice], shape) -> tuple[slice, sl
     return slice(max(top, 0), min(bottom, height)), slice(max(left, 0), min(right, width))
 
 
+def _display_box(rows: slice, columns: slice, height: int) -> Bbox:
+    """The pixel rectangle ``rows`` x ``columns`` (rows from the top) in display coordinates."""
+    return Bbox.from_extents(columns.start, height - rows.stop, columns.stop, height - rows.start)
+
+
 def _disjoint(boxes: list[tuple[slice, slice]]) -> bool:
     def meet(a: slice, b: slice) -> bool:
         return a.start < b.stop and b.start < a.stop
@@ -178,27 +195,52 @@ def _disjoint(boxes: list[tuple[slice, slice]]) -> bool:
     )
 
 
+@contextmanager
+def _alone(ax: Axes, piece, others: list):
+    """Leave everything of ``ax`` but ``piece`` out of a draw of ``ax``.
+
+    The ``others`` are marked animated (a draw of their axes skips them), and
+    the patch, which :meth:`Axes.draw` draws first whatever its state, hidden
+    unless it is the piece. Both are set back afterwards.
+    """
+    patch_shown = ax.patch.get_visible()
+    marked = [a for a in others if a is not piece and a is not ax.patch]
+    for artist in marked:
+        artist.set_animated(True)
+    if piece is not ax.patch:
+        ax.patch.set_visible(False)
+    try:
+        yield
+    finally:
+        ax.patch.set_visible(patch_shown)
+        for artist in marked:
+            artist.set_animated(False)
+
+
 class BackgroundCache:
     """Render ``figure`` on ``canvas``, reusing the pieces of each axes' frame that hold.
 
     A frame is drawn piece by piece (:func:`split`, :func:`piece_key`) over
-    the blank, keeping the picture after each piece; when a piece changes,
-    the picture before it is taken up again and the rest drawn over it, in
-    the order of a full draw. ``hits`` counts the frames reused whole,
-    ``misses`` those with a piece drawn anew (one of the two per axes and
-    render), ``pieces_drawn`` the pieces drawn, ``full`` the renders drawn in
-    full.
+    the blank, keeping the picture after each piece: each piece is drawn by
+    :meth:`Axes.draw` with the rest of its axes left out (marked animated, as
+    matplotlib's blitting guide does), so it lands where a full draw puts it
+    (a title above top tick labels, say). When a piece changes, the picture
+    before it is taken up again and the rest drawn over it, in the order of a
+    full draw. A render pastes the frames into the blank and draws every
+    foreground over them. ``hits`` counts the frames reused whole, ``misses``
+    those with a piece drawn anew (one of the two per axes and render),
+    ``pieces_drawn`` the pieces drawn, ``full`` the renders drawn in full.
     """
 
     def __init__(self, figure: Figure, canvas: FigureCanvasAgg):
         self.figure, self.canvas = figure, canvas
         self.hits = self.misses = self.pieces_drawn = self.full = 0
-        self._figure_key = self._blank = self._scratch = None  # set up by the first render
+        self._figure_key = self._blank = self._blank_pixels = None  # set up by the first render
         self._pieces, self._frames = [], []
 
     def clear(self) -> None:
         """Forget every frame (the next render draws them anew)."""
-        self._pieces = [[(None, picture) for _, picture in pieces] for pieces in self._pieces]
+        self._pieces = [[] for _ in self._pieces]
 
     def render(self) -> None:
         """Draw the figure into the canvas's pixels (call inside any ``rc_context`` needed)."""
@@ -211,10 +253,9 @@ class BackgroundCache:
             self._start()
         layers = []
         for k, ax in enumerate(figure.axes):
-            # What Axes.draw does before it draws: autoscale, aspect, the titles' place.
-            ax._unstale_viewLim()
+            # Where Axes.draw would put the axes (an aspect may move it); its limits settle
+            # on first reading, as in a draw.
             ax.apply_aspect()
-            ax._update_title_position(self._scratch)
             frame, front = split(ax)
             layers.append((ax, front))
             keys = [piece_key(ax, artist) for artist in frame]
@@ -226,14 +267,14 @@ class BackgroundCache:
                 self.hits += 1
             else:
                 self.misses += 1
-                self._frames[k] = self._draw_frame(k, ax, frame, keys, same)
-        if not _disjoint([(rows, columns) for rows, columns, _ in self._frames]):
+                self._frames[k] = self._draw_frame(k, ax, frame, front, same)
+        if not _disjoint([box for box, _ in self._frames]):
             self._draw_in_full()  # frames that touch: a full draw puts one over the other
             return
-        pixels = np.asarray(self.canvas.get_renderer().buffer_rgba())
-        pixels[...] = self._blank
-        for rows, columns, frame in self._frames:
-            pixels[rows, columns] = frame
+        canvas = self.canvas
+        canvas.restore_region(self._blank)
+        for _, frame in self._frames:
+            canvas.restore_region(frame)
         for ax, artists in layers:
             for artist in artists:
                 ax.draw_artist(artist)
@@ -253,28 +294,27 @@ class BackgroundCache:
         finally:
             for ax in visible:
                 ax.set_visible(True)
-        self._blank = np.array(self.canvas.get_renderer().buffer_rgba())
-        height, width = self._blank.shape[:2]
-        self._scratch = RendererAgg(width, height, figure.dpi)
+        self._blank = self.canvas.copy_from_bbox(figure.bbox)
+        self._blank_pixels = np.array(self.canvas.buffer_rgba())
         self._pieces = [[] for _ in figure.axes]
         self._frames = [None] * len(figure.axes)
         self._figure_key = _figure_key(figure)
 
-    def _draw_frame(self, k: int, ax: Axes, frame: list, keys: list, same: int):
+    def _draw_frame(self, k: int, ax: Axes, frame: list, front: list, same: int):
         """Draw the pieces of the frame of axes ``k`` from ``same`` on over the picture of
-        those before; return where the frame differs from the blank, and its pixels."""
-        scratch = np.asarray(self._scratch.buffer_rgba())
-        pieces = self._pieces[k]
-        scratch[...] = pieces[same - 1][1] if same else self._blank
-        for j in range(same, len(frame)):
-            frame[j].draw(self._scratch)
+        those before; return where the frame lies (row and column slices) and its pixels
+        there (a region for ``restore_region``)."""
+        canvas, pieces = self.canvas, self._pieces[k]
+        del pieces[same:]
+        canvas.restore_region(pieces[-1][1] if pieces else self._blank)
+        everything = [*frame, *front]
+        for piece in frame[same:]:
+            with _alone(ax, piece, everything):
+                self.figure.draw_artist(ax)
             self.pieces_drawn += 1
-            if j < len(pieces):  # reuse the picture's memory: fresh pages cost more than a copy
-                np.copyto(pieces[j][1], scratch)
-                pieces[j] = (keys[j], pieces[j][1])
-            else:
-                pieces.append((keys[j], scratch.copy()))
-        del pieces[len(frame) :]
-        picture = pieces[-1][1] if pieces else self._blank
-        rows, columns = _frame_box(ax, _changed_box(picture, self._blank), picture.shape)
-        return rows, columns, picture[rows, columns]
+            # The key after the draw: drawing places the titles.
+            pieces.append((piece_key(ax, piece), canvas.copy_from_bbox(self.figure.bbox)))
+        pixels = np.asarray(canvas.buffer_rgba())
+        rows, columns = _frame_box(ax, _changed_box(pixels, self._blank_pixels), pixels.shape)
+        region = canvas.copy_from_bbox(_display_box(rows, columns, pixels.shape[0]))
+        return (rows, columns), region

@@ -6,18 +6,24 @@ change of its axes) under a canvas drawn in the browser by
 picture's data coordinates, to the kernel, which launches the orbit through
 it and sends the orbit's points back as float32 buffers; the browser draws
 them in a new colour over the picture. Undo removes the last orbit, clear
-removes all.
+removes all, and "Copy as code" (in the Orbits column) copies the code that
+computes the last one.
 
 * :func:`section_explorer` (notebook 11): the section ``theta_1 = 0``,
   ``theta_1' > 0`` of the double pendulum at a chosen energy, in
   ``(theta_2, p_2)``. The missing momentum ``p_1`` comes from the energy
   (:func:`pendulum_lab.chaos.section_states`); the crossings from
   :func:`pendulum_lab.chaos.poincare_section`. Grey marks where no orbit of
-  that energy reaches the section.
+  that energy reaches the section. Orbits belong to their energy: moving the
+  energy slider shows the orbits launched at the new energy, keeps the
+  others for when it comes back, and says so. A model with damping or a
+  drive is refused: its orbits leave the energy surface.
 * :func:`portrait_explorer` (notebook 03): the simple pendulum's level sets
   (:func:`pendulum_lab.plotting.plot_phase_portrait`) and the simulated
   orbit from the clicked ``(theta, omega)``, angles wrapped into
-  ``(-pi, pi]``; the window widens when an orbit leaves it.
+  ``(-pi, pi]``; the window widens when an orbit leaves it. The orbit is the
+  model's own: with damping or a drive it crosses the level sets, which are
+  those of the pendulum without them, and the explorer says so.
 
 Keyboard: the arrow keys move a cross-hair, Enter launches there, U undoes.
 A click where no orbit exists, or a run that fails, leaves the picture as it
@@ -39,13 +45,21 @@ from matplotlib.figure import Figure
 
 from .. import chaos, plotting
 from .. import validation as check
-from ..driver.simulate import simulate
 from ..model import require_model
 from ..model.pendulum import PendulumModel
 from ..plotting.png import png_bytes
+from .calls import SimulateCall, model_code
 from .channel import STATIC, ReplayWidget, float32_buffer
-from .controls import check_steps, column, run_controls, slider
+from .controls import (
+    check_steps,
+    column,
+    energy_is_conserved,
+    forces_text,
+    run_controls,
+    slider,
+)
 from .instrument import EXPECTED_ERRORS, WidgetWithPicture
+from .status import StatusLine
 
 __all__ = [
     "ClickablePlot",
@@ -57,6 +71,12 @@ __all__ = [
     "section_explorer",
     "section_reach",
 ]
+
+#: The format of the Poincare section's energy on its slider (its values are whole steps of
+#: :data:`ENERGY_STEP`, so the readout shows the value the title and messages state).
+ENERGY_FORMAT = ".1f"
+#: Step of the Poincare section's energy slider [J].
+ENERGY_STEP = 0.5
 
 
 def _hex(rgba) -> str:
@@ -81,7 +101,8 @@ class ClickablePlot(ReplayWidget):
     frame : dict
         Where the axes are: ``box`` (left, top, right, bottom as fractions of
         the picture, from its top-left corner), ``xlim``, ``ylim``, ``size``
-        (CSS pixels), ``labels`` (axis names for the pointer readout) and
+        (CSS pixels), ``labels`` (axis names for the pointer readout),
+        ``title`` (the picture's, also its text for screen readers) and
         ``style`` (``"points"`` or ``"line"``).
     orbits : list of dict
         ``{"xy": float32 bytes of shape (K, 2), "colour": "#rrggbb",
@@ -97,28 +118,35 @@ class ClickablePlot(ReplayWidget):
 
 @dataclass(frozen=True)
 class Orbit:
-    """One launched orbit: the points drawn (shape ``(K, 2)``), its colour and a label."""
+    """One launched orbit: the points drawn (shape ``(K, 2)``), its colour, a label, and the
+    code that computes it ("Copy as code")."""
 
     points: np.ndarray
     colour: str
     label: str
+    code: str = ""
 
 
 class ClickExplorer(WidgetWithPicture):
     """Controls, a clickable picture, undo and clear; the explorers below fill in the physics.
 
     Subclasses implement ``_draw_background(ax)`` (draw the picture into
-    axes whose position is fixed) and ``_launch(x, y) -> (points, label)``
-    (raise ``ValueError`` with a readable sentence when there is no orbit
-    through ``(x, y)``); ``_redraw_on`` names the controls whose change
-    clears the orbits and redraws the picture.
+    axes whose position is fixed) and ``_launch(x, y) -> (points, label,
+    code)`` (raise ``ValueError`` with a readable sentence when there is no
+    orbit through ``(x, y)``); ``_redraw_on`` names the controls whose change
+    redraws the picture. Orbits belong to the values of those controls
+    (:meth:`view`): the picture shows the orbits launched at the current
+    ones, and keeps the others.
 
     Attributes
     ----------
     controls : dict of str -> ipywidgets widget
     plot : ClickablePlot
     orbits : list of Orbit
+        The orbits shown (launched at the current values of ``_redraw_on``).
     message : str
+    status : StatusLine
+        Holds "Copy as code" (the code of the last orbit shown).
     widget : ipywidgets.VBox
     """
 
@@ -129,17 +157,17 @@ class ClickExplorer(WidgetWithPicture):
     def __init__(self, model: PendulumModel, controls: dict, columns: list):
         self.model = model
         self.controls = controls
-        self.orbits: list[Orbit] = []
-        self._launches = 0
+        self._orbits: dict[tuple, list[Orbit]] = {}
         self.plot = ClickablePlot()
         self.plot.handle("click", self._on_click)
         self.plot.handle("undo", lambda content: self.undo())
+        self.status = StatusLine()
         undo = widgets.Button(description="Undo", tooltip="remove the last orbit (U)")
-        clear = widgets.Button(description="Clear", tooltip="remove every orbit")
+        clear = widgets.Button(description="Clear", tooltip="remove every orbit shown")
         undo.on_click(lambda _: self.undo())
         clear.on_click(lambda _: self.clear())
         boxes = [column(title, [controls[k] for k in keys]) for title, keys in columns]
-        boxes.append(column("Orbits", [undo, clear]))
+        boxes.append(column("Orbits", [undo, clear, self.status]))
         self.widget = widgets.VBox([widgets.HBox(boxes), self.plot])
         for key in self._redraw_on:
             controls[key].observe(lambda change: self.redraw(), names="value")
@@ -150,14 +178,40 @@ class ClickExplorer(WidgetWithPicture):
         """The sentence shown under the picture."""
         return self.plot.message
 
+    @property
+    def orbits(self) -> list[Orbit]:
+        """The orbits shown: those launched at the current :meth:`view`."""
+        return self._orbits.setdefault(self.view(), [])
+
+    def view(self) -> tuple:
+        """The values of the controls the picture depends on (``_redraw_on``)."""
+        return tuple(self.controls[key].value for key in self._redraw_on)
+
+    def describe_view(self, view: tuple) -> str:
+        """``view`` in words, for messages (subclasses with ``_redraw_on`` say more)."""
+        return ", ".join(map(str, view))
+
     # ---- the picture ------------------------------------------------------------------------
     def redraw(self) -> None:
-        """Draw the picture again and remove every orbit (they belong to the old picture)."""
-        self.orbits.clear()
-        self._launches = 0
+        """Draw the picture again, with the orbits launched at the current :meth:`view`.
+
+        The message says how many are shown and how many are kept at other
+        values of the controls.
+        """
         self._draw_picture()
         self._send_orbits()
-        self.plot.show_message(self._hint)
+        here = len(self.orbits)
+        elsewhere = {view: len(orbits) for view, orbits in self._orbits.items()
+                     if orbits and view != self.view()}
+        parts = [self._hint]
+        if here:
+            parts.insert(0, f"{here} orbit(s) launched here before are shown.")
+        if elsewhere:
+            kept = "; ".join(f"{count} at {self.describe_view(view)}"
+                             for view, count in elsewhere.items())
+            parts.append(f"Orbits launched elsewhere are kept, not shown ({kept}): move the "
+                         "slider back to see them.")
+        self.plot.show_message(" ".join(parts))
 
     def _draw_picture(self) -> None:
         width, height = _SIZE
@@ -175,14 +229,17 @@ class ClickExplorer(WidgetWithPicture):
                 "ylim": [float(v) for v in ax.get_ylim()],
                 "size": [width, height],
                 "labels": [ax.get_xlabel(), ax.get_ylabel()],
+                "title": ax.get_title(),
                 "style": self._style,
             }
 
     def _send_orbits(self) -> None:
+        orbits = self.orbits
         self.plot.orbits = [
             {"xy": float32_buffer(o.points), "colour": o.colour, "label": o.label}
-            for o in self.orbits
+            for o in orbits
         ]
+        self.status.code = orbits[-1].code if orbits else ""
 
     # ---- clicks -----------------------------------------------------------------------------
     def click(self, x: float, y: float) -> bool:
@@ -195,35 +252,37 @@ class ClickExplorer(WidgetWithPicture):
             x, y = check.real_number("x", x), check.real_number("y", y)
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always", RuntimeWarning)
-                points, label = self._launch(x, y)
+                points, label, code = self._launch(x, y)
         except EXPECTED_ERRORS as err:
             self.plot.show_message(f"No orbit launched: {err}.", "error")
             return False
-        colour = COLOURS[self._launches % len(COLOURS)]
-        self._launches += 1
-        self.orbits.append(Orbit(np.asarray(points, dtype=float), colour, label))
+        orbits = self.orbits
+        colour = COLOURS[len(orbits) % len(COLOURS)]
+        orbits.append(Orbit(np.asarray(points, dtype=float), colour, label, code))
         notes = [str(w.message) for w in caught if "encountered in" not in str(w.message)]
         self._send_orbits()
         self.plot.show_message(" ".join([label, *notes[:1]]), "error" if notes else "info")
         return True
 
     def undo(self) -> bool:
-        """Remove the last orbit; return whether there was one."""
+        """Remove the last orbit shown; return whether there was one."""
         if not self.orbits:
             self.plot.show_message("Nothing to undo.")
             return False
         self.orbits.pop()
-        self._launches = max(self._launches - 1, 0)
         self._send_orbits()
         self.plot.show_message(f"{len(self.orbits)} orbit(s) shown.")
         return True
 
     def clear(self) -> None:
-        """Remove every orbit."""
+        """Remove every orbit shown (those kept at other values of the controls stay)."""
         self.orbits.clear()
-        self._launches = 0
         self._send_orbits()
         self.plot.show_message(self._hint)
+
+    def code(self) -> str:
+        """Source that computes the last orbit shown (``""`` when none is)."""
+        return self.orbits[-1].code if self.orbits else ""
 
     def _on_click(self, content: dict) -> None:
         x, y = (float("nan") if content.get(k) is None else content.get(k) for k in ("x", "y"))
@@ -300,9 +359,12 @@ class SectionExplorer(ClickExplorer):
 
     def __init__(self, model: PendulumModel, energy: float, t_end: float, dt: float, method):
         depth = -float(model.potential_energy(np.zeros(2)))
+        # On the slider's grid, so that its readout shows the energy the title states.
+        low = math.floor(-depth / ENERGY_STEP + 1) * ENERGY_STEP
+        high = math.floor(depth / ENERGY_STEP) * ENERGY_STEP
         controls = {
-            "energy": slider(energy, -depth + 1.0, depth, 0.5, "E (J)", ".1f"),
-            **run_controls(method, t_end, dt, t_end_range=(10.0, 500.0)),
+            "energy": slider(energy, low, high, ENERGY_STEP, "E (J)", ENERGY_FORMAT),
+            **run_controls(model, method, t_end, dt, t_end_range=(10.0, 500.0)),
         }
         columns = [("Energy surface", ["energy"]), ("Integration", ["method", "dt", "t_end"])]
         super().__init__(model, controls, columns)
@@ -310,6 +372,9 @@ class SectionExplorer(ClickExplorer):
     @property
     def energy(self) -> float:
         return float(self.controls["energy"].value)
+
+    def describe_view(self, view: tuple) -> str:
+        return f"E = {view[0]:g} J"
 
     def _draw_background(self, ax) -> None:
         theta2 = np.linspace(-np.pi, np.pi, 721)
@@ -322,19 +387,20 @@ class SectionExplorer(ClickExplorer):
         ax.set(
             xlim=(-np.pi, np.pi),
             ylim=(-top, top),
-            xlabel="θ₂ (rad)",
-            ylabel="p₂ (kg m²/s)",
-            title=f"Poincaré section θ₁ = 0, θ₁' > 0 at E = {self.energy:g} J",
+            xlabel=plotting.axis_label("theta", "₂"),
+            ylabel=plotting.axis_label("p", "₂"),
+            title=f"Poincaré section θ₁ = 0, θ₁′ > 0 at {self.describe_view((self.energy,))}",
         )
 
     def _launch(self, x, y):
+        energy = self.describe_view((self.energy,))
         reach = float(section_reach(self.model, self.energy, x))
         if not abs(y) <= reach:  # also catches reach = NaN
             where = (
                 "the potential energy alone" if math.isnan(reach) else "the least kinetic energy"
             )
             raise ValueError(
-                f"at E = {self.energy:g} J no orbit passes through θ₂ = {x:.3f} rad, "
+                f"at {energy} no orbit passes through θ₂ = {x:.3f} rad, "
                 f"p₂ = {y:.3f} kg m²/s: with {where} there the energy would exceed E "
                 "(the grey region). Click inside the white region"
             )
@@ -344,11 +410,28 @@ class SectionExplorer(ClickExplorer):
         xs, ys = sec.coordinates()
         points = np.column_stack([np.r_[x, xs], np.r_[y, ys]])
         label = (
-            f"Orbit {self._launches + 1} from θ₂ = {x:.3f} rad, p₂ = {y:.3f} kg m²/s: "
-            f"{len(xs)} crossings in {settings['t_end']:g} s ({settings['method']}, "
+            f"Orbit {len(self.orbits) + 1} from θ₂ = {x:.3f} rad, p₂ = {y:.3f} kg m²/s at "
+            f"{energy}: {len(xs)} crossings in {settings['t_end']:g} s ({settings['method']}, "
             f"Δt = {settings['dt']:g} s)."
         )
-        return points, label
+        call = SimulateCall(self.model, np.reshape(theta0, (-1, 2))[0],
+                            np.reshape(omega0, (-1, 2))[0], **settings)
+        arguments = (f"t_end={float(settings['t_end'])!r}, dt={float(settings['dt'])!r}, "
+                     f"method={settings['method']!r}")
+        code = (
+            "import pendulum_lab as pl\n"
+            "from pendulum_lab import chaos\n\n"
+            f"model = {model_code(self.model)}\n"
+            f"# The state on the section theta1 = 0 through (theta2, p2) = ({x!r}, {y!r}) at "
+            f"E = {self.energy!r} J:\n"
+            f"theta0, omega0 = chaos.section_states(model, {self.energy!r}, [[{x!r}]], "
+            f"[[{y!r}]])\n"
+            f"traj = pl.simulate(model, {call.arguments()})\n"
+            "# Its crossings, the points drawn (after the clicked one):\n"
+            f"section = chaos.poincare_section(model, theta0, omega0, {arguments})\n"
+            "theta2, p2 = section.coordinates()\n"
+        )
+        return points, label, code
 
 
 def section_explorer(
@@ -384,7 +467,15 @@ def section_explorer(
     SectionExplorer
         ``widget`` to display, ``controls`` (``"energy"``, ``"method"``,
         ``"dt"``, ``"t_end"``), ``click(theta2, p2)``, ``undo()``,
-        ``clear()``, ``orbits``, ``message``.
+        ``clear()``, ``orbits`` (those of the energy shown), ``code()``,
+        ``message``.
+
+    Raises
+    ------
+    ValueError
+        For a model that is not a double pendulum, or one with damping or a
+        drive (its energy is not conserved, so its orbits leave the energy
+        surface the section is drawn on), with the reason.
 
     Examples
     --------
@@ -398,6 +489,13 @@ def section_explorer(
     model = require_model(model)
     if model.n != 2:
         raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    if not energy_is_conserved(model):
+        raise ValueError(
+            "`model` must have no damping and no drive: section_explorer launches orbits on one "
+            f"energy surface, and with {forces_text(model)} the energy is not conserved, so an "
+            "orbit leaves its surface; chaos.poincare_section computes the crossings of such "
+            "a model"
+        )
     depth = -float(model.potential_energy(np.zeros(2)))
     energy = check.number_in("energy", energy, -depth, depth, "J", open_low=True)
     return SectionExplorer(model, energy, t_end, dt, method)
@@ -412,7 +510,12 @@ class PortraitExplorer(ClickExplorer):
 
     def __init__(self, model: PendulumModel, t_end: float, dt: float, method):
         self.omega_max = 1.6 * 2.0 * math.sqrt(abs(model.g) / model.lengths[0])
-        controls = run_controls(method, t_end, dt, t_end_range=(1.0, 60.0))
+        if not energy_is_conserved(model):
+            self._hint = (
+                f"{self._hint} The curves are the energy levels of the pendulum without "
+                f"damping and drive; this one ({forces_text(model)}) crosses them."
+            )
+        controls = run_controls(model, method, t_end, dt, t_end_range=(1.0, 60.0))
         super().__init__(model, controls, [("Integration", ["method", "dt", "t_end"])])
 
     def _draw_background(self, ax) -> None:
@@ -420,7 +523,8 @@ class PortraitExplorer(ClickExplorer):
 
     def _launch(self, x, y):
         settings = self._run_settings()
-        traj = simulate(self.model, [x], [y], **settings, progress=False)
+        call = SimulateCall(self.model, np.array([x]), np.array([y]), **settings)
+        traj = call.run()
         theta, omega = plotting.wrap_angle(traj.theta[:, 0]), traj.omega[:, 0]
         finite = np.isfinite(theta) & np.isfinite(omega)
         points = np.column_stack([theta[finite], omega[finite]])
@@ -429,13 +533,22 @@ class PortraitExplorer(ClickExplorer):
             # Widen the window to hold the new orbit; the earlier ones stay.
             self.omega_max = 1.1 * top
             self._draw_picture()
-        energy = traj.energy[finite]
+        change = traj.energy[finite] - traj.energy[0]
+        if energy_is_conserved(self.model):
+            energy = f"max |E − E(0)| = {np.max(np.abs(change)):.2e} J"
+        else:
+            energy = (f"E − E(0) reached {change[np.argmax(np.abs(change))]:+.3g} J (not "
+                      f"conserved: {forces_text(self.model)})")
         label = (
-            f"Orbit {self._launches + 1} from θ = {x:.3f} rad, ω = {y:.3f} rad/s: E = "
-            f"{energy[0]:.3f} J, max |E − E(0)| = {np.max(np.abs(energy - energy[0])):.2e} J "
-            f"over {traj.t[-1]:g} s ({settings['method']}, Δt = {settings['dt']:g} s)."
+            f"Orbit {len(self.orbits) + 1} from θ = {x:.3f} rad, ω = {y:.3f} rad/s: "
+            f"E(0) = {traj.energy[0]:.3f} J, {energy} over {traj.t[-1]:g} s "
+            f"({settings['method']}, Δt = {settings['dt']:g} s)."
         )
-        return points, label
+        code = call.code() + (
+            "# The curve drawn: angles wrapped into (-pi, pi]\n"
+            "theta, omega = pl.plotting.wrap_angle(traj.theta[:, 0]), traj.omega[:, 0]\n"
+        )
+        return points, label, code
 
 
 def portrait_explorer(
@@ -453,7 +566,9 @@ def portrait_explorer(
     Parameters
     ----------
     model : PendulumModel
-        A simple pendulum.
+        A simple pendulum. With damping or a drive (``pl.driven_pendulum()``)
+        the orbit is that model's and crosses the level sets, which are those
+        of the pendulum without them; the explorer says so.
     t_end, dt : float
         Duration of each orbit and step [s].
     method : str
@@ -463,7 +578,7 @@ def portrait_explorer(
     PortraitExplorer
         ``widget`` to display, ``controls`` (``"method"``, ``"dt"``,
         ``"t_end"``), ``click(theta, omega)``, ``undo()``, ``clear()``,
-        ``orbits``, ``omega_max``, ``message``.
+        ``orbits``, ``omega_max``, ``code()``, ``message``.
 
     Examples
     --------

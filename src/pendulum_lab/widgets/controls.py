@@ -7,21 +7,31 @@ instruments of :mod:`pendulum_lab.widgets.live` and
 and a new instrument should too. Control names are fixed: ``theta1``, ...,
 ``omega1``, ..., ``m1``, ..., ``l1``, ..., ``g``, ``method``, ``dt``,
 ``t_end`` (``theta``, ``omega``, ``mass``, ``length`` for one link).
+
+An instrument runs exactly the model it is given: the sliders change its
+masses, lengths and ``g``, and its damping and drive stay as they are
+(:func:`model_from_controls`). The method dropdown offers the methods
+:func:`pendulum_lab.simulate` accepts for that model
+(:func:`pendulum_lab.integrators.suitable_methods`, the rule the driver
+applies), and a method it refuses is refused here by the driver's own check,
+with its reason (:func:`check_method`).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import ipywidgets as widgets
 import numpy as np
 
 from .. import validation as check
-from ..driver.simulate import Trajectory, simulate, step_count
-from ..integrators import METHODS, get_method
+from ..driver.simulate import Trajectory, check_method_fits, hamiltonian_field, step_count
+from ..integrators import METHODS, get_method, suitable_methods
 from ..model import require_model
-from ..model.pendulum import PendulumModel, double_pendulum, n_pendulum, simple_pendulum
+from ..model.pendulum import PendulumModel
 from ..plotting import link_label
+from .calls import SimulateCall
 
 __all__ = [
     "DT_CHOICES",
@@ -29,9 +39,14 @@ __all__ = [
     "SIMULATOR_T_END",
     "SPEEDS",
     "build_simulator",
+    "call_from_controls",
+    "check_method",
     "check_steps",
     "column",
     "control_names",
+    "energy_is_conserved",
+    "forces_text",
+    "methods_for",
     "model_from_controls",
     "parameter_controls",
     "pendulum_controls",
@@ -72,7 +87,15 @@ def control_names(n: int) -> dict[str, list[str]]:
 def slider(
     value: float, low: float, high: float, step: float, description: str, fmt: str = ".2f"
 ) -> widgets.FloatSlider:
-    """A float slider whose range always contains ``value``; the unit is in the description."""
+    """A float slider whose range always contains ``value``; the unit is in the description.
+
+    The range's ends are rounded inward to whole steps: the browser's slider
+    counts its steps from ``min``, so that a step from the keyboard or the
+    mouse lands on round values (2.00, 2.01, ...), as its readout shows them,
+    not on ``-pi + k step``.
+    """
+    low = math.ceil(low / step - 1e-9) * step
+    high = math.floor(high / step + 1e-9) * step
     return widgets.FloatSlider(
         value=value,
         min=min(low, value),
@@ -127,13 +150,76 @@ def parameter_controls(model: PendulumModel) -> dict:
     return controls
 
 
-def run_controls(method, t_end: float, dt: float, t_end_range=(0.1, 100.0)) -> dict:
-    """The method dropdown, a ``dt`` ladder slider [s] and a ``t_end`` slider [s]."""
-    name = get_method(method).name
+def methods_for(model: PendulumModel) -> list[str]:
+    """Names of the methods :func:`pendulum_lab.simulate` accepts for ``model``, in the
+    registry's order (every one for a conservative chain; fewer with damping or a drive)."""
+    return suitable_methods(hamiltonian_field(model))
+
+
+def check_method(model: PendulumModel, method) -> str:
+    """The name of ``method`` if :func:`pendulum_lab.simulate` accepts it for ``model``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, or a method the driver refuses for this model
+        (damping that a symplectic or variational method cannot take, a drive
+        that a variational method cannot take), with the driver's reason and
+        the methods that can.
+    """
+    method = get_method(method)
+    check_method_fits(model, method, hamiltonian_field(model))  # the driver's own check
+    return method.name
+
+
+def energy_is_conserved(model: PendulumModel) -> bool:
+    """Whether the exact motion of ``model`` keeps its energy: no damping and no drive."""
+    return model.is_conservative and model.is_autonomous
+
+
+def forces_text(model: PendulumModel) -> str:
+    """The model's damping and drive in words, with units (``"no damping, no drive"``).
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> forces_text(pl.driven_pendulum())
+    'damping 0.5 N m s/rad, drive 1.2 cos(0.6667 t) N m'
+    """
+    coefficients = {float(c) for c in model.damping}
+    if model.is_conservative:
+        parts = ["no damping"]
+    elif len(coefficients) == 1:  # the same at every joint
+        parts = [f"damping {coefficients.pop():g} N m s/rad"]
+    else:
+        parts = ["damping " + ", ".join(f"{float(c):g}" for c in model.damping) + " N m s/rad"]
+    if model.is_autonomous:
+        parts.append("no drive")
+    else:
+        parts.append(
+            f"drive {float(model.drive_amplitude):g} cos({float(model.drive_frequency):.4g} t) N m"
+        )
+    return ", ".join(parts)
+
+
+def run_controls(
+    model: PendulumModel, method, t_end: float, dt: float, t_end_range=(0.1, 100.0)
+) -> dict:
+    """The method dropdown, a ``dt`` ladder slider [s] and a ``t_end`` slider [s].
+
+    The dropdown offers the course's methods (:data:`pendulum_lab.METHODS`)
+    that :func:`pendulum_lab.simulate` accepts for ``model``
+    (:func:`methods_for`), and ``method`` if it is another one it accepts
+    (a conformal or variational method); a ``method`` it refuses raises
+    :func:`check_method`'s ``ValueError``.
+    """
+    name = check_method(model, method)
+    dt = check.positive_number("dt", dt)
     choices = sorted(set(DT_CHOICES) | {float(dt)})
+    offered = [m for m in methods_for(model) if m in METHODS or m == name]
     return {
         "method": widgets.Dropdown(
-            options=list(METHODS),
+            options=offered,
             value=name,
             description="method",
             style={"description_width": DESCRIPTION_WIDTH},
@@ -151,17 +237,15 @@ def run_controls(method, t_end: float, dt: float, t_end_range=(0.1, 100.0)) -> d
     }
 
 
-def model_from_controls(n: int, controls: dict) -> PendulumModel:
-    """Build the model the parameter controls describe (cheap: compiled code is shared per n)."""
-    keys = control_names(n)
-    masses = [controls[k].value for k in keys["mass"]]
-    lengths = [controls[k].value for k in keys["length"]]
-    g = controls["g"].value
-    if n == 1:
-        return simple_pendulum(mass=masses[0], length=lengths[0], g=g)
-    if n == 2:
-        return double_pendulum(m1=masses[0], m2=masses[1], l1=lengths[0], l2=lengths[1], g=g)
-    return n_pendulum(n, masses=masses, lengths=lengths, g=g)
+def model_from_controls(model: PendulumModel, controls: dict) -> PendulumModel:
+    """``model`` with the masses, lengths and ``g`` the parameter controls hold; its damping
+    and drive unchanged (cheap: compiled code is shared per number of links)."""
+    keys = control_names(model.n)
+    return model.replace(
+        masses=tuple(controls[k].value for k in keys["mass"]),
+        lengths=tuple(controls[k].value for k in keys["length"]),
+        g=controls["g"].value,
+    )
 
 
 def state_from_controls(n: int, controls: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -208,28 +292,41 @@ def start_state(n: int, theta0=None, omega0=None) -> tuple[np.ndarray, np.ndarra
     return theta0, omega0
 
 
-def simulate_controls(n: int, controls: dict, origin=None) -> tuple[PendulumModel, Trajectory]:
-    """The model and the trajectory that a set of explorer controls describes.
+def call_from_controls(model: PendulumModel, controls: dict, origin=None) -> SimulateCall:
+    """The :func:`pendulum_lab.simulate` call that a set of explorer controls describes.
 
     Parameters
     ----------
-    n : int
-        Number of links.
+    model : PendulumModel
+        The instrument's model: its number of links, damping and drive (the
+        controls give the rest).
     controls : dict
         Name -> widget, with the initial-state, parameter, ``dt``, ``t_end``
         and ``method`` controls of :func:`explore`.
     origin : callable ``model -> angles``, optional
         If given, the angle controls are offsets from these angles.
+
+    Raises
+    ------
+    ValueError
+        If the run would take more than :data:`MAX_STEPS` steps.
     """
     c = controls
     check_steps(c["t_end"].value, c["dt"].value)
-    model = model_from_controls(n, c)
-    theta0, omega0 = state_from_controls(n, c)
+    model = model_from_controls(model, c)
+    theta0, omega0 = state_from_controls(model.n, c)
     if origin is not None:
         theta0 = theta0 + origin(model)
-    traj = simulate(model, theta0, omega0, t_end=c["t_end"].value, dt=c["dt"].value,
-                    method=c["method"].value, progress=False)
-    return model, traj
+    return SimulateCall(model, theta0, omega0, t_end=c["t_end"].value, dt=c["dt"].value,
+                        method=c["method"].value)
+
+
+def simulate_controls(
+    model: PendulumModel, controls: dict, origin=None
+) -> tuple[PendulumModel, Trajectory]:
+    """The model and the trajectory of :func:`call_from_controls` (the same arguments)."""
+    call = call_from_controls(model, controls, origin)
+    return call.model, call.run()
 
 
 def pendulum_controls(
@@ -252,18 +349,23 @@ def pendulum_controls(
     Returns
     -------
     controls : dict of str -> ipywidgets widget
-    columns : list of (title, list of control names)
-        For :class:`~pendulum_lab.widgets.Instrument`.
+    columns : list of (title, list of control names or widgets)
+        For :class:`~pendulum_lab.widgets.Instrument`; a model with damping
+        or a drive gets a note of them under its parameters.
     """
     n, keys = model.n, control_names(model.n)
     controls = {
         **state_controls(n, theta0, omega0),
         **parameter_controls(model),
-        **run_controls(method, t_end, dt, t_end_range=t_end_range),
+        **run_controls(model, method, t_end, dt, t_end_range=t_end_range),
     }
+    parameters = keys["mass"] + keys["length"] + ["g"]
+    if not energy_is_conserved(model):
+        # The model's damping and drive are part of it: say so beside the sliders.
+        parameters.append(widgets.HTML(f"<i>and fixed: {forces_text(model)}</i>"))
     columns = [
         ("Initial state", keys["theta"] + keys["omega"]),
-        ("Parameters", keys["mass"] + keys["length"] + ["g"]),
+        ("Parameters", parameters),
         ("Integration", ["method", "dt", "t_end"]),
     ]
     return controls, columns

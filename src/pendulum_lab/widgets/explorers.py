@@ -20,19 +20,21 @@ from matplotlib.ticker import MaxNLocator
 from .. import plotting
 from .. import validation as check
 from ..analysis import equilibrium_angles, find_equilibrium, rest_state_at_energy
-from ..driver.simulate import simulate
 from ..model import require_model
 from ..model.pendulum import PendulumModel
 from .background import BackgroundCache
+from .calls import SimulateCall
 from .controls import (
     DESCRIPTION_WIDTH,
     SLIDER_WIDTH,
+    call_from_controls,
     check_steps,
     control_names,
+    energy_is_conserved,
+    forces_text,
     parameter_controls,
     pendulum_controls,
     run_controls,
-    simulate_controls,
     slider,
     start_state,
     state_controls,
@@ -84,8 +86,8 @@ class Explorer(Instrument):
         #: ``misses`` and ``pieces_drawn`` count what was reused and what drawn anew).
         self.background = BackgroundCache(self.figure, self._canvas)
 
-    def compute(self):
-        return simulate_controls(self.model.n, self.controls)
+    def prepare(self) -> SimulateCall:
+        return call_from_controls(self.model, self.controls)
 
     def redraw(self) -> None:
         # Building axes and their ticks is most of a redraw: on an update, keep
@@ -229,7 +231,8 @@ def explore(
     Parameters
     ----------
     model : PendulumModel
-        Any chain; its masses, lengths and ``g`` are the sliders' start values.
+        Any chain; its masses, lengths and ``g`` are the sliders' start values,
+        and its damping and drive stay as they are (noted beside the sliders).
     theta0, omega0 : array_like, shape (n,), optional
         Initial angles [rad] in ``[-pi, pi]`` and angular velocities [rad/s];
         default 1 rad for one link, ``(2.0, 2.5)`` for two (a chaotic start),
@@ -238,7 +241,10 @@ def explore(
         Duration and step [s]. ``dt`` is offered on a ladder of values
         (:data:`DT_CHOICES`, plus the given one).
     method : str
-        A key of :data:`pendulum_lab.METHODS` (the dropdown's start value).
+        A method :func:`pendulum_lab.simulate` accepts for ``model`` (the
+        dropdown's start value; the dropdown offers the others of
+        :data:`pendulum_lab.METHODS` it accepts); another raises
+        ``ValueError`` with the driver's reason.
     plots : sequence of str or callable
         Panels, by name from :data:`pendulum_lab.plotting.PANELS`
         (``"energy"``, ``"energy_error"``, ``"angles"``, ``"phase"``,
@@ -252,7 +258,8 @@ def explore(
         ``controls`` (``"theta1"``, ..., ``"omega1"``, ..., ``"m1"``, ...,
         ``"l1"``, ..., ``"g"``, ``"dt"``, ``"t_end"``, ``"method"``; for one
         link ``"theta"``, ``"omega"``, ``"mass"``, ``"length"``),
-        ``trajectory``, ``figure``, ``message``, ``model`` and ``update()``.
+        ``trajectory``, ``figure``, ``message``, ``model``, ``code()`` (the
+        ``pl.simulate`` call of the run shown) and ``update()``.
         An update redraws only the data of a panel whose axes, ticks and
         labels are unchanged (``background`` counts them); to that end each
         autoscaled axis's limits are rounded out a little (:func:`round_limits`).
@@ -306,7 +313,7 @@ class EquilibriumExplorer(Instrument):
                 prefix="δ",
             ),
             **parameter_controls(model),
-            **run_controls(method, t_end, dt, t_end_range=(0.1, 30.0)),
+            **run_controls(model, method, t_end, dt, t_end_range=(0.1, 30.0)),
         }
         keys = control_names(n)
         columns = [
@@ -321,11 +328,11 @@ class EquilibriumExplorer(Instrument):
         """The selected :class:`~pendulum_lab.symbolic.mechanics.Equilibrium`."""
         return self.model.chain.equilibrium(self.controls["equilibrium"].value)
 
-    def compute(self):
+    def prepare(self) -> SimulateCall:
         def origin(model):
             return equilibrium_angles(model, self.controls["equilibrium"].value)
 
-        return simulate_controls(self.model.n, self.controls, origin=origin)
+        return call_from_controls(self.model, self.controls, origin=origin)
 
     def draw(self, figure):
         left = figure.add_subplot(1, 2, 1)
@@ -383,8 +390,20 @@ def explore_equilibrium(
         offsets), ``"omega1"``, ... (angular velocities), the parameters,
         ``"method"``, ``"dt"``, ``"t_end"``; the left panel shows the
         linearised motion ``exp(A t) x0``, the right the simulation.
+
+    Raises
+    ------
+    ValueError
+        For a model with damping or a drive (its linearisation is not the
+        conservative chain's), with the reason.
     """
     model = require_model(model)
+    if not energy_is_conserved(model):
+        raise ValueError(
+            "`model` must have no damping and no drive: explore_equilibrium compares the motion "
+            "with its linearisation about an equilibrium of the conservative chain, and this "
+            f"model has {forces_text(model)}; explore(model) shows its motion"
+        )
     n = model.n
     equilibrium = find_equilibrium(model, equilibrium).name
     offset = check.state_vector("offset", [0.05] + [0.0] * (n - 1) if offset is None else offset,
@@ -410,26 +429,18 @@ class EnergyExplorer(Instrument):
                 "E (J)",
                 f".{max(0, -math.floor(math.log10(step)))}f",
             ),
-            **run_controls(method, t_end, dt, t_end_range=(1.0, 200.0)),
+            **run_controls(model, method, t_end, dt, t_end_range=(1.0, 200.0)),
         }
         columns = [("Energy", ["energy"]), ("Integration", ["method", "dt", "t_end"])]
         self._cols = model.n
         super().__init__(model, controls, columns)
 
-    def compute(self):
+    def prepare(self) -> SimulateCall:
         c = self.controls
         check_steps(c["t_end"].value, c["dt"].value)
         theta0 = rest_state_at_energy(self.model, c["energy"].value)
-        traj = simulate(
-            self.model,
-            theta0,
-            np.zeros(self.model.n),
-            t_end=c["t_end"].value,
-            dt=c["dt"].value,
-            method=c["method"].value,
-            progress=False,
-        )
-        return self.model, traj
+        return SimulateCall(self.model, theta0, np.zeros(self.model.n), t_end=c["t_end"].value,
+                            dt=c["dt"].value, method=c["method"].value)
 
     def draw(self, figure):
         axes = [figure.add_subplot(1, self._cols, k + 1) for k in range(self._cols)]
@@ -475,8 +486,20 @@ def explore_energy(
     -------
     EnergyExplorer
         Controls ``"energy"``, ``"method"``, ``"dt"``, ``"t_end"``.
+
+    Raises
+    ------
+    ValueError
+        For a model with damping or a drive (its energy does not stay on a
+        level), with the reason.
     """
     model = require_model(model)
+    if not energy_is_conserved(model):
+        raise ValueError(
+            "`model` must have no damping and no drive: explore_energy follows the chain on one "
+            f"level of its energy, and this model has {forces_text(model)}, which carry it off "
+            "that level; explore(model) shows its motion and its energy"
+        )
     depth = -float(model.potential_energy(np.zeros(model.n)))
     if depth <= 0:
         raise ValueError(f"the model's `g` must be positive, got {model.g}")

@@ -1,13 +1,25 @@
 """The machinery of every instrument: controls, a status line, and how a run is shown.
 
-An :class:`Instrument` observes its controls, recomputes a trajectory when
-one changes, catches what cannot be simulated and says so in its status
-line, and then shows the run. By default it shows it in a matplotlib figure
-rendered to PNG into an ``ipywidgets.Image``, which works the same in
-JupyterLab, in a notebook run by nbval and in a test without any front end,
-and needs no interactive matplotlib backend. An instrument built with
-``figure=False`` has no figure and shows the run its own way (the live
-simulator of :mod:`pendulum_lab.widgets.live` sends it to the browser).
+An :class:`Instrument` observes its controls; when one changes it prepares
+the :func:`pendulum_lab.simulate` call they describe (a
+:class:`~pendulum_lab.widgets.calls.SimulateCall`), runs it, catches what
+cannot be simulated and says so in its status line
+(:class:`~pendulum_lab.widgets.status.StatusLine`), and then shows the run.
+By default it shows it in a matplotlib figure rendered to PNG into an
+``ipywidgets.Image``, which works the same in JupyterLab, in a notebook run
+by nbval and in a test without any front end, and needs no interactive
+matplotlib backend. An instrument built with ``figure=False`` has no figure
+and shows the run its own way (the live simulator of
+:mod:`pendulum_lab.widgets.live` sends it to the browser).
+
+While the run is computed, the status line says so (in the browser after
+half a second, with the seconds elapsed) and the figure is marked stale:
+:meth:`Instrument.working` is the one place for a "please wait" sentence.
+After it, the status line offers the run as code ("Copy as code").
+
+Displayed in a notebook, an instrument adds a one-line hint after itself,
+seen only in JupyterLab where the widget cannot be shown (a notebook
+reopened without its kernel): run the cell to bring the instrument back.
 """
 
 from __future__ import annotations
@@ -15,6 +27,7 @@ from __future__ import annotations
 import base64
 import warnings
 from collections.abc import Mapping
+from contextlib import contextmanager
 
 import ipywidgets as widgets
 import matplotlib as mpl
@@ -22,13 +35,23 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..driver.simulate import Trajectory
+from ..driver.simulate import Trajectory, step_count
 from ..integrators import ConvergenceError
 from ..model.pendulum import PendulumModel
 from ..plotting.png import png_bytes
-from .controls import column
+from .calls import SimulateCall
+from .controls import column, energy_is_conserved, forces_text
+from .status import StatusLine
 
-__all__ = ["DPI", "EXPECTED_ERRORS", "ROW_HEIGHT", "WIDTH", "Instrument", "WidgetWithPicture"]
+__all__ = [
+    "DPI",
+    "EXPECTED_ERRORS",
+    "REOPEN_HINT",
+    "ROW_HEIGHT",
+    "WIDTH",
+    "Instrument",
+    "WidgetWithPicture",
+]
 
 DPI = 90
 ROW_HEIGHT = 3.4  # inches per row of panels
@@ -38,7 +61,21 @@ WIDTH = 10.5  # inches
 #: catches them and says so in its status line instead of raising.
 EXPECTED_ERRORS = (ValueError, TypeError, ConvergenceError, FloatingPointError, OverflowError)
 
-_COLOURS = {"info": "#333", "warning": "#9a6700", "error": "#b00020"}
+#: The hint shown after an instrument's output where JupyterLab cannot show the widget
+#: (reopened without the widget's kernel state): hidden everywhere else (inline style), shown
+#: by its own style rules only in an output area holding a widget that failed to display
+#: (JupyterLab marks the failed output itself ``jupyter-widgets``; a shown widget is a child),
+#: whose error line it hides.
+REOPEN_HINT = (
+    '<div class="plab-reopen-hint" style="display:none">'
+    "This instrument needs its Python kernel: run this cell to bring it back.</div>"
+    "<style>"
+    ".jp-OutputArea:has(.jp-OutputArea-output.jupyter-widgets) .plab-reopen-hint"
+    "{display:block !important;font-style:italic;color:#555}"
+    ".jp-OutputArea:has(.plab-reopen-hint) .jp-OutputArea-output.jupyter-widgets"
+    "{display:none}"
+    "</style>"
+)
 
 
 class WidgetWithPicture:
@@ -46,8 +83,8 @@ class WidgetWithPicture:
 
     A live front end (JupyterLab) shows the widget; a page without a kernel
     (the course website, a notebook viewer) shows the picture instead of
-    controls that would do nothing. No ``_ipython_display_``: IPython would
-    use it instead of the bundle.
+    controls that would do nothing. In IPython a second output follows, the
+    :data:`REOPEN_HINT` (seen only where JupyterLab cannot show the widget).
     """
 
     widget = None
@@ -62,15 +99,22 @@ class WidgetWithPicture:
         bundle[mime] = base64.b64encode(data).decode()
         return bundle
 
+    def _ipython_display_(self):
+        from IPython.display import display  # IPython is there whenever this is called
+
+        display(self._repr_mimebundle_(), raw=True)
+        display({"text/html": REOPEN_HINT, "text/plain": ""}, raw=True)
+
 
 class Instrument(WidgetWithPicture):
     """Controls, a status line and a view of the run that :meth:`update` recomputes.
 
-    Subclasses implement :meth:`compute` (build the model and the trajectory
-    from the controls; raise ``ValueError`` for an invalid combination) and
-    either :meth:`draw` (draw the run into the figure) or, for an instrument
-    built with ``figure=False``, :meth:`show`. Everything else -- observing
-    the controls, catching errors, the message -- lives here once.
+    Subclasses implement :meth:`prepare` (the :func:`pendulum_lab.simulate`
+    call the controls describe; raise ``ValueError`` for an invalid
+    combination) and either :meth:`draw` (draw the run into the figure) or,
+    for an instrument built with ``figure=False``, :meth:`show`. Everything
+    else -- observing the controls, running the call, catching errors, the
+    status line -- lives here once.
 
     Parameters
     ----------
@@ -78,8 +122,9 @@ class Instrument(WidgetWithPicture):
         The model before the first update.
     controls : dict of str -> ipywidgets.ValueWidget
         A change of any of them recomputes.
-    columns : list of (str, list of str)
-        Titles and control names of the columns of controls.
+    columns : list of (str, list of str or ipywidgets.Widget)
+        Titles and contents of the columns of controls: control names, or
+        widgets shown as they are (a note, say).
     rows : float
         Height of the figure in rows of panels.
     figure : bool
@@ -92,8 +137,12 @@ class Instrument(WidgetWithPicture):
         The model of the latest successful update.
     trajectory : Trajectory
         The latest successful trajectory.
+    call : SimulateCall
+        The call that computed it (:meth:`code` gives it as source).
     figure : matplotlib.figure.Figure or None
         The figure shown (redrawn in place); None for ``figure=False``.
+    status : StatusLine
+        The status line (its ``code`` is :meth:`code`, for "Copy as code").
     widget : ipywidgets.VBox
         Controls, status line and figure; display this.
     """
@@ -102,7 +151,7 @@ class Instrument(WidgetWithPicture):
         self,
         model: PendulumModel,
         controls: dict,
-        columns: list[tuple[str, list[str]]],
+        columns: list[tuple[str, list]],
         rows: float = 1,
         *,
         figure: bool = True,
@@ -110,11 +159,15 @@ class Instrument(WidgetWithPicture):
         self.model = model
         self.controls = controls
         self.trajectory: Trajectory | None = None
-        self._message = ""
+        self.call: SimulateCall | None = None
         self._holding = False
-        self._status = widgets.HTML(layout=widgets.Layout(min_height="1.6em"))
-        boxes = [column(title, [controls[k] for k in keys]) for title, keys in columns if keys]
-        children = [widgets.HBox(boxes), self._status]
+        self.status = StatusLine()
+        boxes = [
+            column(title, [controls[k] if isinstance(k, str) else k for k in keys])
+            for title, keys in columns
+            if keys
+        ]
+        children = [widgets.HBox(boxes), self.status]
         self.figure = self._canvas = self._image = None
         if figure:
             self.figure = Figure(figsize=(WIDTH, ROW_HEIGHT * rows), dpi=DPI)
@@ -126,8 +179,9 @@ class Instrument(WidgetWithPicture):
             control.observe(self._on_change, names="value")
 
     # ---- what subclasses provide ------------------------------------------------------------
-    def compute(self) -> tuple[PendulumModel, Trajectory]:
-        """The model and the trajectory the controls describe (subclasses implement this).
+    def prepare(self) -> SimulateCall:
+        """The :func:`pendulum_lab.simulate` call the controls describe (subclasses implement
+        this; it should be quick: :meth:`update` runs the call).
 
         Raises one of :data:`EXPECTED_ERRORS` for a combination that cannot be
         simulated; :meth:`update` turns it into a message.
@@ -139,13 +193,21 @@ class Instrument(WidgetWithPicture):
         raise NotImplementedError
 
     def summary(self) -> str:
-        """The status line after a successful update: steps, method, time, energy error."""
+        """The status line after a successful update: steps, method, time, and the energy:
+        its error where the model conserves it, its change (and why) where it does not."""
         traj = self.trajectory
-        err = float(np.max(np.abs(traj.energy_error)))
-        return (
+        change = traj.energy_error
+        run = (
             f"{len(traj.t) - 1} steps of {traj.method.name} (dt = {traj.dt:g} s) in "
             f"{traj.wall_time:.2f} s; E(0) = {traj.energy[0]:.4f} J, "
-            f"max |E − E(0)| = {err:.2e} J"
+        )
+        if energy_is_conserved(self.model):
+            return run + f"max |E − E(0)| = {float(np.max(np.abs(change))):.2e} J"
+        largest = float(change[np.argmax(np.abs(np.nan_to_num(change)))])
+        return run + (
+            f"E − E(0) reached {largest:+.3g} J: energy is not conserved "
+            f"({forces_text(self.model)}), so this is the forces' work plus the method's "
+            "error, not an error alone"
         )
 
     def show(self) -> None:
@@ -178,15 +240,27 @@ class Instrument(WidgetWithPicture):
     @property
     def message(self) -> str:
         """The text of the status line: a summary of the run, a warning or an error."""
-        return self._message
+        return self.status.text
 
     def set_message(self, text: str, kind: str = "info") -> None:
         """Show ``text`` in the status line; ``kind``: ``"info"``, ``"warning"`` or ``"error"``."""
-        if kind not in _COLOURS:
-            raise ValueError(f"`kind` must be one of {list(_COLOURS)}, got {kind!r}")
-        self._message = text
-        escaped = text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-        self._status.value = f'<span style="color:{_COLOURS[kind]}">{escaped}</span>'
+        self.status.show(text, kind)
+
+    @contextmanager
+    def working(self, text: str):
+        """Say ``text`` in the status line and mark the figure stale while the block runs.
+
+        The browser shows both only once the block has taken half a second
+        (:data:`~pendulum_lab.widgets.status.BUSY_DELAY`), with the seconds
+        elapsed; :meth:`update` wraps the run in it. The place for any
+        other wait an instrument has (a first-use compile, say).
+        """
+        with self.status.working(text, box=self.widget):
+            yield
+
+    def code(self) -> str:
+        """Source that computes the trajectory shown (``""`` before the first run)."""
+        return "" if self.call is None else self.call.code()
 
     def set_controls(self, values: Mapping[str, object]) -> bool:
         """Set several controls at once and recompute once; return whether the update succeeded.
@@ -219,7 +293,11 @@ class Instrument(WidgetWithPicture):
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always", RuntimeWarning)
-                model, trajectory = self.compute()
+                call = self.prepare()
+                steps = step_count(call.t_end, call.dt)
+                with self.working(f"computing {steps} steps of {call.method} "
+                                  f"(dt = {call.dt:g} s)…"):
+                    trajectory = call.run()
         except EXPECTED_ERRORS as err:
             what = (
                 "The solver did not converge"
@@ -233,12 +311,13 @@ class Instrument(WidgetWithPicture):
             )
             self.set_message(f"{what}: {err}. {kept}", "error")
             return False
-        self.model, self.trajectory = model, trajectory
+        self.model, self.trajectory, self.call = call.model, trajectory, call
         try:
             self.show()
         except EXPECTED_ERRORS as err:
             self.set_message(f"Could not show the run: {err}", "error")
             return False
+        self.status.code = call.code()
         # The driver's own warning (a blow-up) says what happened; NumPy's
         # "overflow encountered in ..." that may follow it adds nothing.
         notes = list(
@@ -253,7 +332,6 @@ class Instrument(WidgetWithPicture):
         else:
             self.set_message(self.summary())
         return True
-
 
     def picture(self) -> tuple[str, bytes]:
         """The figure as drawn now: ``(mime type, bytes)``; one without a figure overrides this."""

@@ -19,6 +19,13 @@ In the browser
     chain follows; on release the kernel restarts the motion from there, at
     rest (:meth:`LiveSimulator.drag`).
 
+A description of the state shown (time, kinetic, potential and total
+energy, the energy error) sits in an ARIA live region beside the canvas,
+updated when the state shown changes other than by playing (a step, a
+scrub, pause, a new run) and when playing starts, so that a screen reader
+announces it. For a model that does not conserve energy (damping, a drive),
+the trace and the description call ``E - E(0)`` an energy change.
+
 The drawing counts the frames it has drawn in the ``data-frames`` attribute
 of its root element (``.plab-live``), for measuring the frame rate, and the
 mean time it spent drawing one in ``data-draw-ms``.
@@ -36,14 +43,17 @@ from ..driver.simulate import Trajectory
 from ..model import require_model, wrap_angle
 from ..model.pendulum import PendulumModel
 from ..plotting.scene import TRAIL, still_frame
+from .calls import SimulateCall
 from .channel import STATIC, ReplayWidget, float32_buffer
 from .controls import (
     SIMULATOR_T_END,
     SPEEDS,
     build_simulator,
+    call_from_controls,
     control_names,
+    energy_is_conserved,
+    forces_text,
     pendulum_controls,
-    simulate_controls,
 )
 from .instrument import Instrument
 
@@ -88,7 +98,10 @@ def run_messages(
     ``lengths``, ``masses``, ``states`` (all chunks together), ``spacing`` (s
     between sent states), ``dt``, ``stride``, ``steps``, ``method``,
     ``energy0``, ``energy_range`` (bar scale, including 0), ``error_max``
-    (largest ``|E - E(0)|`` over every step) and ``completed``.
+    (largest ``|E - E(0)|`` over every step), ``completed``, ``conserved``
+    (whether the model conserves energy: else ``E - E(0)`` is the work of its
+    damping and drive plus the method's error, and the browser says so) and
+    ``forces`` (:func:`~pendulum_lab.widgets.controls.forces_text`).
 
     Parameters
     ----------
@@ -145,6 +158,8 @@ def run_messages(
         "energy_range": [float(levels.min()), float(levels.max())],
         "error_max": float(finite_error.max()) if finite_error.size else 0.0,
         "completed": bool(traj.completed),
+        "conserved": energy_is_conserved(model),
+        "forces": forces_text(model),
     }
     messages = []
     for chunk, first in enumerate(range(0, len(kept), chunk_states)):
@@ -286,8 +301,8 @@ class LiveSimulator(Instrument):
         self.widget.children = (*self.widget.children, self.view)
 
     # ---- the Instrument's hooks: no figure, the run goes to the browser ------------------------
-    def compute(self):
-        return simulate_controls(self.model.n, self.controls)
+    def prepare(self) -> SimulateCall:
+        return call_from_controls(self.model, self.controls)
 
     def show(self) -> None:
         """Send the current run to the browser, which plays it from ``t = 0``."""
@@ -313,32 +328,40 @@ class LiveSimulator(Instrument):
         become :func:`released_angles` (``theta`` are the angles when the drag
         started, by default the current initial angles), the angular
         velocities zero; the sliders move there and the run is recomputed
-        once. Returns whether it succeeded; if not (a non-finite value, a
-        release on the joint, a run that cannot be computed) ``message``
-        says why and the previous motion stays.
+        once. Returns whether the run was computed; if not, ``message`` says
+        why and the previous motion goes on.
+
+        Raises
+        ------
+        TypeError, ValueError
+            For a release that cannot start a motion (a value that is not a
+            finite number, ``bob`` not a link number, a release on the joint),
+            saying why; the simulator is left as it was. (A release in the
+            browser shows the same sentence in the status line and in the
+            picture instead.)
         """
         keys = control_names(self.model.n)
         if theta is None:
             theta = [self.controls[k].value for k in keys["theta"]]
-        try:
-            angles = released_angles(self.model, theta, bob, x, y)
-        except (TypeError, ValueError) as err:
-            self.set_message(
-                f"Cannot start from that drag: {err}. The previous motion goes on.", "error"
-            )
-            return False
+        angles = released_angles(self.model, theta, bob, x, y)
         start = dict(zip(keys["theta"], angles.tolist()))
         start.update(dict.fromkeys(keys["omega"], 0.0))
         self.view.playing = True
         return self.set_controls(start)
 
     def _on_release(self, content: dict) -> None:
-        ok = self.drag(
-            _as_number(content.get("bob")),
-            _as_number(content.get("x")),
-            _as_number(content.get("y")),
-            content.get("theta"),
-        )
+        try:
+            ok = self.drag(
+                _as_number(content.get("bob")),
+                _as_number(content.get("x")),
+                _as_number(content.get("y")),
+                content.get("theta"),
+            )
+        except (TypeError, ValueError) as err:
+            self.set_message(
+                f"Cannot start from that drag: {err}. The previous motion goes on.", "error"
+            )
+            ok = False
         self.view.send({"type": "released", "ok": bool(ok), "message": self.message})
 
     @property

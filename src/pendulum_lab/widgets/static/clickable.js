@@ -87,6 +87,8 @@ function render({ model, el }) {
     canvas.style.height = `${h}px`;
     const f = frame();
     root.dataset.frame = JSON.stringify({ box: f.box, xlim: f.xlim, ylim: f.ylim, size: [w, h] });
+    const [xName, yName] = f.labels || ["x", "y"];
+    image.alt = f.title ? `${f.title}: ${yName} against ${xName}` : "";
     draw();
   }
 

@@ -4,7 +4,10 @@
 // run_messages); this module plays the run with requestAnimationFrame at the display's
 // frame rate, interpolating linearly between the saved states, and draws the chain with
 // a trail, energy bars, the energy-error trace and the readouts. Dragging a bob moves
-// the chain; on release the kernel is asked for the motion from there.
+// the chain; on release the kernel is asked for the motion from there. A text
+// description of the state shown (time, energies, energy error) is kept in an ARIA live
+// region, updated when the state shown changes other than by playing (a step, a scrub,
+// pause, a new run) and when playing starts or ends, so that a screen reader announces it.
 // No imports, nothing from the network: the file travels inside the Python package.
 
 const WIDTH = 900;
@@ -110,8 +113,12 @@ function render({ model, el }) {
   const help = element("span", "plab-help");
   help.textContent = "drag a bob · Space play/pause · ←/→ step · ↑/↓ speed";
   const status = element("div", "plab-status", { role: "status", "aria-live": "polite" });
+  const description = element("div", "plab-sr-only plab-description", {
+    "aria-live": "polite",
+    "aria-atomic": "true",
+  });
   bar.append(back, play, forward, speedBox, scrub, clock);
-  root.append(canvas, bar, help, status);
+  root.append(canvas, bar, help, status, description);
   el.appendChild(root);
 
   const context = canvas.getContext("2d");
@@ -138,6 +145,7 @@ function render({ model, el }) {
   let pending = false; // a release sent, no answer yet
   let frameId = 0;
   let drawSeconds = 0; // time spent drawing, for data-draw-ms (the cost of one frame)
+  let describeDue = true; // the description waits for the next frame drawn
 
   function setStatus(text, kind) {
     status.textContent = text || "";
@@ -169,6 +177,7 @@ function render({ model, el }) {
 
   function setPlaying(value, save = true) {
     if (value && run && run.available === run.meta.states && t >= duration()) t = 0;
+    if (value !== playing) describeDue = true;
     playing = value;
     play.textContent = playing ? "❚❚ pause" : "▶ play";
     play.setAttribute("aria-pressed", playing ? "true" : "false");
@@ -186,6 +195,7 @@ function render({ model, el }) {
   function seek(time, save = true) {
     t = Math.min(Math.max(time, 0), duration());
     dirty = true;
+    describeDue = true;
     if (save) {
       model.set("time", t);
       model.save_changes();
@@ -209,6 +219,7 @@ function render({ model, el }) {
       model.set("speed", speed);
       model.save_changes();
       dirty = true;
+      describeDue = true;
     }
   }
 
@@ -382,6 +393,26 @@ function render({ model, el }) {
     c.fillText("E(0)", left + 152, yOf(run.meta.energy0) + 4);
   }
 
+  // What the readout shows, in sentences (the live region's text).
+  function energyWords(meta) {
+    return meta.conserved
+      ? "energy error E − E(0)"
+      : `energy change E − E(0) (energy is not conserved: ${meta.forces})`;
+  }
+  function describe() {
+    if (!run || run.available === 0) return "Waiting for the kernel.";
+    const meta = run.meta;
+    const [kinetic, potential, total] = [0, 1, 2].map((k) => seriesAt(run.energies, 3, k, t));
+    const error = seriesAt(run.error, 1, 0, t);
+    const state = playing ? `Playing at ${speed}× speed from` : "Paused at";
+    return (
+      `${state} t = ${format(t, 2)} s of ${format(fullDuration(), 1)} s (${meta.method}, ` +
+      `Δt = ${meta.dt} s). Kinetic energy T = ${format(kinetic, 3)} J, potential energy ` +
+      `V = ${format(potential, 3)} J, total E = ${format(total, 3)} J; ` +
+      `${energyWords(meta)} = ${error.toExponential(2)} J.`
+    );
+  }
+
   function drawError(c) {
     const left = CHAIN + 240;
     const right = WIDTH - 16;
@@ -400,7 +431,8 @@ function render({ model, el }) {
     c.stroke();
     c.fillStyle = COLOURS.text;
     c.font = "12px sans-serif";
-    c.fillText("E − E(0) (J)", left, top - 8);
+    c.fillText(run.meta.conserved ? "energy error E − E(0) (J)" : "energy change E − E(0) (J)",
+      left, top - 8);
     c.fillStyle = COLOURS.faint;
     c.fillText(`+${bound.toExponential(1)}`, right - 58, top - 8);
     c.fillText(`0 … ${total.toFixed(1)} s`, right - 70, bottom + 16);
@@ -438,6 +470,7 @@ function render({ model, el }) {
       `step ${step} of ${meta.steps}`,
       `E − E(0) = ${seriesAt(run.error, 1, 0, t).toExponential(2)} J`,
     ];
+    if (!meta.conserved) lines.push("energy not conserved: damping/drive");
     if (!meta.completed) lines.push("the run stopped: the state became non-finite");
     c.fillStyle = COLOURS.text;
     c.font = "13px monospace";
@@ -476,6 +509,10 @@ function render({ model, el }) {
         scrub.value = String(Math.round(t / run.meta.spacing));
         clock.textContent = `${format(t, 2)} s`;
       }
+      if (describeDue) {
+        description.textContent = describe();
+        describeDue = false;
+      }
     }
   }
   frameId = requestAnimationFrame(tick);
@@ -496,6 +533,7 @@ function render({ model, el }) {
           dragging = null;
           t = 0;
           lastStamp = null;
+          describeDue = true;
           scrub.max = String(run.meta.states - 1);
         }
       }

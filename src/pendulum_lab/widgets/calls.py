@@ -1,0 +1,122 @@
+"""The run behind an instrument's picture, as a value and as code ("copy as code").
+
+An instrument prepares a :class:`SimulateCall` from its controls (the
+model, the initial state, ``t_end``, ``dt`` and the method), runs it, and
+offers its :meth:`~SimulateCall.code`: the ``pl.simulate(...)`` call that a
+student pastes into a cell to get the same trajectory, number for number
+(every float is written with ``repr``, which reads back exactly).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..driver.simulate import Trajectory, simulate
+from ..model import PendulumModel
+
+__all__ = ["SimulateCall", "model_code", "numbers"]
+
+
+def numbers(values) -> str:
+    """A list of floats as Python source that reads back exactly.
+
+    >>> numbers([2.0, 0.1 + 0.2])
+    '[2.0, 0.30000000000000004]'
+    """
+    return "[" + ", ".join(repr(float(v)) for v in np.ravel(values)) + "]"
+
+
+def model_code(model: PendulumModel) -> str:
+    """The ``pl.<factory>(...)`` call that builds ``model`` again, parameters included.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> model_code(pl.double_pendulum(m2=0.5))
+    'pl.double_pendulum(m1=1.0, m2=0.5, l1=1.0, l2=1.0, g=9.81)'
+    >>> model_code(pl.driven_pendulum(drive_amplitude=1.5))
+    'pl.driven_pendulum(damping=0.5, drive_amplitude=1.5, drive_frequency=0.6666666666666666, \
+mass=1.0, length=1.0, g=1.0)'
+    """
+    masses, lengths = [float(m) for m in model.masses], [float(v) for v in model.lengths]
+    g = float(model.g)
+    forces = []
+    if not model.is_conservative:
+        damping = {float(c) for c in model.damping}
+        forces.append(f"damping={damping.pop()!r}" if len(damping) == 1
+                      else f"damping={numbers(model.damping)}")
+    if not model.is_autonomous:
+        forces.append(f"drive_amplitude={float(model.drive_amplitude)!r}")
+    if model.drive_frequency is not None:
+        forces.append(f"drive_frequency={float(model.drive_frequency)!r}")
+    if model.n == 1:
+        if not forces:
+            return f"pl.simple_pendulum(mass={masses[0]!r}, length={lengths[0]!r}, g={g!r})"
+        damping = float(model.damping[0])
+        drive = float(model.drive_amplitude)
+        frequency = None if model.drive_frequency is None else float(model.drive_frequency)
+        return (f"pl.driven_pendulum(damping={damping!r}, drive_amplitude={drive!r}, "
+                f"drive_frequency={frequency!r}, mass={masses[0]!r}, length={lengths[0]!r}, "
+                f"g={g!r})")
+    extra = "".join(", " + part for part in forces)
+    if model.n == 2:
+        return (f"pl.double_pendulum(m1={masses[0]!r}, m2={masses[1]!r}, l1={lengths[0]!r}, "
+                f"l2={lengths[1]!r}, g={g!r}{extra})")
+    return (f"pl.n_pendulum({model.n}, masses={numbers(masses)}, lengths={numbers(lengths)}, "
+            f"g={g!r}{extra})")
+
+
+@dataclass(frozen=True)
+class SimulateCall:
+    """One :func:`pendulum_lab.simulate` call: what an instrument runs and what it copies.
+
+    Attributes
+    ----------
+    model : PendulumModel
+    theta0, omega0 : ndarray, shape (n,)
+        Initial angles [rad] and angular velocities [rad/s].
+    t_end, dt : float
+        Duration and step [s].
+    method : str
+        A method's name.
+    """
+
+    model: PendulumModel
+    theta0: np.ndarray
+    omega0: np.ndarray
+    t_end: float
+    dt: float
+    method: str
+
+    def run(self) -> Trajectory:
+        """The trajectory (no progress bar: an instrument reports in its status line)."""
+        return simulate(self.model, self.theta0, self.omega0, t_end=self.t_end, dt=self.dt,
+                        method=self.method, progress=False)
+
+    def arguments(self) -> str:
+        """The call's arguments after ``model``, as source."""
+        return (f"{numbers(self.theta0)}, {numbers(self.omega0)}, t_end={float(self.t_end)!r}, "
+                f"dt={float(self.dt)!r}, method={self.method!r}")
+
+    def code(self) -> str:
+        """Source that computes the same trajectory, as ``traj``.
+
+        Examples
+        --------
+        >>> import numpy as np, pendulum_lab as pl
+        >>> call = SimulateCall(pl.simple_pendulum(), np.array([1.0]), np.array([0.0]),
+        ...                     t_end=2.0, dt=0.01, method="rk4")
+        >>> print(call.code())
+        import pendulum_lab as pl
+        <BLANKLINE>
+        model = pl.simple_pendulum(mass=1.0, length=1.0, g=9.81)
+        traj = pl.simulate(model, [1.0], [0.0], t_end=2.0, dt=0.01, method='rk4')
+        <BLANKLINE>
+        """
+        return (
+            "import pendulum_lab as pl\n\n"
+            f"model = {model_code(self.model)}\n"
+            f"traj = pl.simulate(model, {self.arguments()})\n"
+        )
