@@ -201,33 +201,51 @@ def test_python_api_names_the_bad_argument(tmp_path):
 
 
 # ---------------------------------------------------------------- the analysis helpers it uses
-@pytest.mark.parametrize(
-    "name, helper",
-    [
-        ("explicit_euler", "def explicit_rk("),
-        ("rk4", "def explicit_rk("),
-        ("semi_implicit_euler", "def fixed_point_status("),
-        ("leapfrog", "def fixed_point_status("),
-        ("glrk4", "def implicit_rk("),
-        ("glrk8", "def fixed_point_status("),
-    ],
-)
-def test_method_source_is_the_running_code_with_its_helpers(name, helper):
+#: The longest text method_source may show for one method, helpers included ("about 40").
+MAX_SOURCE_LINES = 45
+
+
+@pytest.mark.parametrize("name", [*pl.METHODS, *pl.CONFORMAL_METHODS, *pl.VARIATIONAL_METHODS])
+def test_method_source_is_the_reference_step_with_its_helpers(name):
+    """What a notebook shows is the method's reference step, the one its kernel is tested on.
+
+    ``Method.reference`` is the step that tests/integrators/test_reference_steps.py compares
+    the compiled kernel with; method_source shows its source (after a comment naming the
+    tableau or rule it is bound to), then the reference functions it calls.
+    """
+    import functools
     import inspect
 
-    kernel = pl.METHODS[name].kernel
-    own = inspect.getsource(getattr(kernel, "py_func", kernel))
+    method = pl.get_method(name)
+    step = method.reference
+    function = step.func if isinstance(step, functools.partial) else step
     text = source.method_source(name)
-    assert text.startswith(own.rstrip())
-    assert helper in text
-    assert helper not in source.method_source(name, helpers=False)
-    explicit = name in ("explicit_euler", "rk4")
-    assert ("def fixed_point_status(" in text) is not explicit  # negative control
+    own = inspect.getsource(function).rstrip()
+    assert text.startswith(own) or text.split("\n", 1)[1].startswith(own)
+    if isinstance(step, functools.partial):
+        assert text.startswith(f"# {name}: {function.__name__}(")
+    assert len(text.splitlines()) <= MAX_SOURCE_LINES
+    # the helpers: the fixed-point solver (with the stopping rule) of every implicit method
+    solver = "def fixed_point("
+    assert (solver in text) is method.implicit  # negative control: explicit ones have none
+    assert solver not in source.method_source(name, helpers=False) or function.__name__ == solver
+    # negative control: not the compiled kernel (that is tested against this, not shown)
+    compiled = inspect.getsource(method.kernel.py_func).strip().splitlines()[0]
+    assert compiled not in text
+
+
+def test_method_source_shows_the_formula():
+    assert "y1 = y + h * field.f(t, y)" in source.method_source("explicit_euler")
+    assert "p_half - h / 2 * field.H_q(t + h, q1, p_half)" in source.method_source("leapfrog")
+    assert "<the Butcher tableau of glrk4, 2 stages>" in source.method_source("glrk4")
+    with pytest.raises(ValueError, match="`method` must be one of"):
+        source.method_source("midpoint")
 
 
 def test_velocity_method_source_uses_the_acceleration():
     text = source.method_source("leapfrog_velocity")
-    assert "acceleration(t + h, q1, v_half" in text and "hamilton(" not in text
+    assert "field.acceleration(t + h, q1, v_half)" in text and "hamilton" not in text
+    assert "field.acceleration" not in source.method_source("leapfrog")  # negative control
 
 
 def test_windowed_energy_error_takes_the_maximum_in_each_window():

@@ -3,8 +3,10 @@
 Modules, in the order they build on each other: ``tableau`` (Butcher tableaus and their
 conditions), ``field`` (what a method sees of a system), ``step`` (how a step is declared),
 ``stopping`` (the stopping rule of every implicit solve), one module per family of methods
-(``runge_kutta``, ``symplectic``, ``velocity``, ``variational``), ``method`` and ``registry``
-(the methods by name), ``source`` (a method's code as the notebooks show it).
+(``runge_kutta``, ``symplectic``, ``velocity``, ``variational``), ``reference`` (every method
+again as a plain NumPy reference step that reads like its formula), ``method`` and ``registry``
+(the methods by name, each with its compiled step and its reference step), ``source`` (a
+method's reference step as the notebooks show it).
 
 This layer knows vector fields, not pendulums. A vector field is a set of
 compiled kernels (see :mod:`pendulum_lab.codegen.signatures`):
@@ -43,6 +45,12 @@ textbook formulas line by line, with the time attached to the positions (extende
 the first kick at ``t``, the last at ``t + h``); the conformal methods compose them with the
 exact flow of linear damping. All implicit equations are iterated to round-off with one stopping
 rule, :func:`~pendulum_lab.integrators.stopping.fixed_point_status`.
+
+The compiled steps are written for speed (workspaces, views, stage sums padded to vector lanes).
+Each method also carries a reference step (:attr:`Method.reference
+<pendulum_lab.integrators.method.Method.reference>`, :mod:`~pendulum_lab.integrators.reference`):
+the same step in NumPy, with the same starting values and the same stopping rule, never used in a
+run; the tests compare the two step by step, and the notebooks show the reference.
 
 The variational integrators (:data:`VARIATIONAL_METHODS`) are made from a
 discrete Lagrangian instead of the vector field: their step solves the

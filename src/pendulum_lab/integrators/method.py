@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .reference import runge_kutta_reference
 from .runge_kutta import tableau_step
 from .tableau import ButcherTableau
 
@@ -49,6 +50,11 @@ class Method:
     rule, solver : str or None
         For a variational method (:func:`variational_method`): the discrete
         Lagrangian's quadrature rule and how its step solves for ``q1``.
+    reference : callable or None
+        The same step in plain NumPy, written as its formula reads
+        (:mod:`pendulum_lab.integrators.reference`): what the notebooks show
+        (:func:`~pendulum_lab.integrators.source.method_source`) and what the
+        compiled ``kernel`` is tested against, step by step. Never used in a run.
     """
 
     name: str
@@ -62,18 +68,24 @@ class Method:
     tableau: ButcherTableau | None = field(default=None, repr=False)
     rule: str | None = None
     solver: str | None = None
+    reference: object = field(default=None, repr=False)
 
     @classmethod
-    def from_tableau(cls, name: str, tableau: ButcherTableau, summary: str) -> Method:
+    def from_tableau(cls, name: str, tableau: ButcherTableau, summary: str,
+                     reference=None) -> Method:
         """The Runge-Kutta method of ``tableau`` on ``(q, p)``; nothing typed but the name.
 
         Order, implicitness and symplecticity come from the tableau
         (:class:`~pendulum_lab.integrators.tableau.ButcherTableau`), the step function from
-        :func:`tableau_step`. A Runge-Kutta method integrates any field.
+        :func:`tableau_step`, the reference step from
+        :func:`~pendulum_lab.integrators.reference.runge_kutta_reference` unless
+        ``reference`` gives the method's formula written out (explicit Euler's). A
+        Runge-Kutta method integrates any field.
         """
         return cls(name, tableau.order, tableau.symplectic_condition().holds,
                    not tableau.explicit, "canonical", summary, tableau_step(tableau, name),
-                   tableau=tableau)
+                   tableau=tableau,
+                   reference=runge_kutta_reference(tableau) if reference is None else reference)
 
     def __str__(self) -> str:
         return self.name

@@ -2,7 +2,8 @@
 
 A Runge-Kutta method is one entry made from its Butcher tableau by
 :meth:`~pendulum_lab.integrators.method.Method.from_tableau`; the other families declare
-their properties next to their step. :func:`get_method` looks a method up,
+their properties next to their step, and every entry its reference step
+(:mod:`~pendulum_lab.integrators.reference`). :func:`get_method` looks a method up,
 :func:`unsuitability` says why a method cannot integrate a field, and :func:`step_kernels`
 picks the two kernels a method's step receives from a field.
 """
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import reference
 from .field import HamiltonianField
 from .method import ANY_FIELD, CONFORMAL_FIELD, HAMILTONIAN_FIELD, LAGRANGIAN_FIELD, Method
 from .symplectic import (
@@ -36,14 +38,16 @@ __all__ = [
 
 
 _REGISTRY = [
+    # Its reference step is the formula itself, not the one-stage stage loop.
     Method.from_tableau("explicit_euler", ButcherTableau(a=[[0.0]], b=[1.0]),
-                        "explicit Euler: y1 = y + h f(y)"),
+                        "explicit Euler: y1 = y + h f(y)", reference=reference.explicit_euler),
     Method("semi_implicit_euler", 1, True, True, "canonical",
            "symplectic Euler in (theta, p): implicit in p1 unless H is separable",
-           semi_implicit_euler_step, applies_to=HAMILTONIAN_FIELD),
+           semi_implicit_euler_step, applies_to=HAMILTONIAN_FIELD,
+           reference=reference.symplectic_euler),
     Method("leapfrog", 2, True, True, "canonical",
            "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step,
-           applies_to=HAMILTONIAN_FIELD),
+           applies_to=HAMILTONIAN_FIELD, reference=reference.stormer_verlet),
     Method.from_tableau("rk4", ButcherTableau(a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0],
                                                  [0, 0, 1, 0]], b=[1 / 6, 1 / 3, 1 / 3, 1 / 6]),
                         "classical fourth-order Runge-Kutta"),
@@ -63,20 +67,21 @@ _REGISTRY = [
                         "eight-stage Gauss-Legendre collocation (order 16, implicit)"),
     Method("semi_implicit_euler_velocity", 1, False, False, "velocity",
            "the report's semi-implicit Euler on (theta, omega): not symplectic for n >= 2",
-           semi_implicit_euler_velocity_step),
+           semi_implicit_euler_velocity_step, reference=reference.semi_implicit_euler_velocity),
     # Its kick takes the acceleration at the old velocity, and on a chain of two or more links
     # the acceleration depends on the velocity: first order there (observed 0.94-0.99 on the
     # double pendulum), second only on one link, where it is the canonical leapfrog.
     Method("leapfrog_velocity", 1, False, False, "velocity",
            "the report's leapfrog on (theta, omega): second order on one link, first order "
            "and not symplectic for n >= 2",
-           leapfrog_velocity_step),
+           leapfrog_velocity_step, reference=reference.leapfrog_velocity),
     Method("conformal_euler", 1, True, True, "canonical",
            "conformal symplectic Euler: symplectic Euler, then the exact linear damping",
-           conformal_euler_step, applies_to=CONFORMAL_FIELD),
+           conformal_euler_step, applies_to=CONFORMAL_FIELD, reference=reference.conformal_euler),
     Method("conformal_leapfrog", 2, True, True, "canonical",
            "conformal Stormer-Verlet: exact damping for h/2, leapfrog, damping for h/2",
-           conformal_leapfrog_step, applies_to=CONFORMAL_FIELD),
+           conformal_leapfrog_step, applies_to=CONFORMAL_FIELD,
+           reference=reference.conformal_leapfrog),
     # Fixed-point iteration, as for Gauss-Legendre. Newton's method with the
     # generated Jacobian needs half the iterations and is faster per step
     # (benchmark item 7), but at large steps it can converge to another root

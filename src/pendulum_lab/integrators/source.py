@@ -1,25 +1,24 @@
-"""The source code of a method's step, as the library runs it.
+"""A method's step as the notebooks show it: its reference step, the formula in plain NumPy.
 
-Notebooks show it next to the derivation, so text and code cannot drift apart.
+Each registered method carries a reference step (:attr:`Method.reference
+<pendulum_lab.integrators.method.Method.reference>`, :mod:`pendulum_lab.integrators.reference`)
+against which its compiled kernel is tested step by step; showing that source next to the
+derivation keeps text, formula and tested code together.
 """
 
 from __future__ import annotations
 
+import functools
 import inspect
 
 from .registry import get_method
+from .tableau import ButcherTableau
 
 __all__ = ["method_source"]
 
 
-def _python_function(obj):
-    """The Python function behind a compiled (Numba) or wrapped callable."""
-    obj = getattr(obj, "py_func", obj)
-    return inspect.unwrap(obj) if callable(obj) else obj
-
-
 def _code_names(code) -> list[str]:
-    """Global names a code object uses, including those of nested functions."""
+    """Global names a code object uses, including those of nested functions and lambdas."""
     names = list(code.co_names)
     for const in code.co_consts:
         if inspect.iscode(const):
@@ -27,38 +26,62 @@ def _code_names(code) -> list[str]:
     return names
 
 
-def method_source(method, helpers: bool = True) -> str:
-    """The source code of a method's one-step function, as the library runs it.
+def _binding(name: str, step: functools.partial) -> str:
+    """A comment line saying which arguments a method's reference step has bound."""
+    bound = ", ".join(f"{key}=<the Butcher tableau of {name}, {value.stages} stages>"
+                      if isinstance(value, ButcherTableau) else f"{key}={value!r}"
+                      for key, value in step.keywords.items())
+    return f"# {name}: {step.func.__name__}(field, t, q, p, h, {bound})"
 
-    Notebooks show this next to the derivation, so text and code cannot drift
-    apart.
+
+def method_source(method, helpers: bool = True) -> str:
+    """The source code of a method's reference step, the formula the compiled step is tested on.
+
+    Notebooks show this next to the derivation. The compiled kernel
+    (``Method.kernel``) computes the same step, to round-off, as the tests check step by
+    step (``tests/integrators/test_reference_steps.py``); it is written for speed, this for
+    reading.
 
     Parameters
     ----------
     method : str or Method
-        A key of :data:`pendulum_lab.METHODS`.
+        A key of :data:`pendulum_lab.METHODS`, ``CONFORMAL_METHODS`` or
+        ``VARIATIONAL_METHODS``, or a :class:`~pendulum_lab.integrators.method.Method`
+        with a reference step.
     helpers : bool
-        Also append the source of the functions of the integrators that the
-        step calls (the Runge-Kutta stage loop, the fixed-point stopping
+        Also append the source of the functions of the step's module that it calls (the
+        symplectic step a conformal one composes, the fixed-point solver, the stopping
         rule), each once, in order of first use.
 
     Returns
     -------
     str
+        The step's source, preceded by a comment line naming the bound arguments when the
+        step is a general one bound to the method's data (a Runge-Kutta method's tableau).
 
     Examples
     --------
-    >>> "def leapfrog_step" in method_source("leapfrog")
-    True
+    >>> print(method_source("explicit_euler"))  # doctest: +ELLIPSIS
+    def explicit_euler(field, t, q, p, h):
+        ...
+        y1 = y + h * field.f(t, y)
+    ...
     """
-    main = _python_function(get_method(method).kernel)
-    found, queue = [main], [main]
+    chosen = get_method(method)
+    step = chosen.reference
+    if step is None:
+        raise ValueError(f"`method` {chosen.name!r} has no reference step to show")
+    header = []
+    if isinstance(step, functools.partial):
+        header, step = [_binding(chosen.name, step)], step.func
+    found, queue = [step], [step]
     while helpers and queue:
-        fn = queue.pop(0)
-        for name in _code_names(fn.__code__):
-            candidate = _python_function(fn.__globals__.get(name))
-            if (inspect.isfunction(candidate) and candidate.__module__.startswith(__package__)
+        function = queue.pop(0)
+        for name in _code_names(function.__code__):
+            candidate = function.__globals__.get(name)
+            if (inspect.isfunction(candidate) and candidate.__module__ == step.__module__
                     and candidate not in found):
                 found.append(candidate)
                 queue.append(candidate)
-    return "\n\n".join(inspect.getsource(fn).rstrip() for fn in found) + "\n"
+    sources = [inspect.getsource(function).rstrip() for function in found]
+    return "\n".join(header) + ("\n" if header else "") + "\n\n".join(sources) + "\n"

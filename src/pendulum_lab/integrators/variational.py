@@ -8,11 +8,14 @@ References
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from .. import validation as check
 from ..symbolic.discrete_mechanics import RULES
 from .method import LAGRANGIAN_FIELD, Method
+from .reference import variational
 from .step import jit_step
 from .stopping import MAX_SWEEPS, fixed_point_status
 
@@ -70,4 +73,6 @@ def variational_method(rule: str, solver: str, name: str | None = None) -> Metho
     return Method(name or f"variational_{rule}", 2, True, True, "canonical",
                   f"variational integrator of the {rule} rule ({quadrature}): symmetric, "
                   "symplectic in (theta, p)", variational_step, applies_to=LAGRANGIAN_FIELD,
-                  rule=rule, solver=solver)
+                  rule=rule, solver=solver,
+                  reference=functools.partial(variational, rule=rule,
+                                              solver=VARIATIONAL_SOLVERS[solver]))
