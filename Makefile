@@ -1,21 +1,34 @@
 # The two commands of the README:
 #   make lab    create the environment if needed and open JupyterLab on the course
+#               (options for JupyterLab: make lab ARGS="--no-browser --port 8899")
 #   make test   create or update the environment and run the whole test suite
 # and the course website:
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
+# Passed to `pendulum-lab` by `make lab` (its options, then JupyterLab's after `--`).
+ARGS ?=
+
+# What each command installs on top of the package (extras of pyproject.toml): a student's
+# `make lab` needs the package and JupyterLab only; the others add what they use.
+extras_lab := lab
+extras_test := lab,test,docs,bench
+extras_docs := docs
+extras_bench := bench
 # MathJax for the website, served from the site itself (from the npm registry, checked by npm).
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
 .PHONY: lab test check lint bench docs mathjax clean
 
-$(BIN)/.installed: pyproject.toml
+$(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e ".[lab,test,docs,bench]"
+
+# One stamp per set of extras, made again when pyproject.toml changes.
+$(VENV)/.installed-%: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -e ".[$(extras_$*)]"
 	touch $@
 
 # The browser build of MathJax (es5/), without the SVG output and the other combined files.
@@ -31,24 +44,24 @@ $(MATHJAX):
 
 mathjax: $(MATHJAX)
 
-docs: $(BIN)/.installed $(MATHJAX)
+docs: $(VENV)/.installed-docs $(MATHJAX)
 	$(BIN)/python tools/build_site.py
 
-lab: $(BIN)/.installed
-	$(BIN)/pendulum-lab
+lab: $(VENV)/.installed-lab
+	$(BIN)/pendulum-lab $(ARGS)
 
 # Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one).
-test: $(BIN)/.installed $(MATHJAX)
+test: $(VENV)/.installed-test $(MATHJAX)
 	$(BIN)/ruff check .
 	$(BIN)/python tools/run_tests.py
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
 # the notebooks, the browser, the website or Binder (docs/testing.md).
-check: $(BIN)/.installed
+check: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder
 
-bench: $(BIN)/.installed
+bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/run.py
 
 clean:
