@@ -264,8 +264,9 @@ def warm_up_offer(ns=(1, 2), methods=None):
 
     Nothing runs until the button is pressed; then :func:`warm_up_in_background` does the
     work (``ns`` and ``methods`` as :func:`warm_up`) and the bar, its label and the button
-    say how far it is. The returned box's ``warmup`` is the :class:`BackgroundWarmUp` once
-    started (None before).
+    say how far it is (the bar appears once pressed: a page without a kernel, such as the
+    course website, shows no progress that cannot happen). The returned box's ``warmup`` is
+    the :class:`BackgroundWarmUp` once started (None before).
     """
     import ipywidgets as widgets
 
@@ -273,7 +274,7 @@ def warm_up_offer(ns=(1, 2), methods=None):
                             icon="play", layout=widgets.Layout(width="auto"))
     bar = widgets.IntProgress(value=0, min=0, max=1, layout=widgets.Layout(width="20em"))
     label = widgets.Label("")
-    bar.layout.visibility = "hidden"
+    progress = widgets.HBox([bar, label])
 
     def show(warmup: BackgroundWarmUp) -> None:
         bar.max = max(warmup.total, 1)
@@ -294,11 +295,11 @@ def warm_up_offer(ns=(1, 2), methods=None):
     def start(_button) -> None:
         button.disabled = True
         button.description = "Compiling in the background…"
-        bar.layout.visibility = "visible"
+        box.children = (button, progress)  # shown once there is progress to show
         bar.bar_style = ""
         box.warmup = warm_up_in_background(ns, methods, on_progress=show)
 
     button.on_click(start)
-    box = widgets.VBox([button, widgets.HBox([bar, label])])
+    box = widgets.VBox([button])
     box.warmup = None
     return box
