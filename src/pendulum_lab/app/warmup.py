@@ -259,11 +259,12 @@ def warm_up_in_background(ns=(1, 2), methods=None, on_progress=None) -> Backgrou
     return BackgroundWarmUp(command, on_progress)
 
 
-def warm_up_offer(ns=(1, 2), methods=None):
+def warm_up_offer(ns=(1, 2, 3), methods=None):
     """A button that warms up the course in the background, with a progress bar (ipywidgets).
 
     Nothing runs until the button is pressed; then :func:`warm_up_in_background` does the
-    work (``ns`` and ``methods`` as :func:`warm_up`) and the bar, its label and the button
+    work (``ns`` and ``methods`` as :func:`warm_up`; by default every chain length the course
+    uses, as the Binder image prepares them) and the bar, its label and the button
     say how far it is (the bar appears once pressed: a page without a kernel, such as the
     course website, shows no progress that cannot happen). The returned box's ``warmup`` is
     the :class:`BackgroundWarmUp` once started (None before).
