@@ -4,6 +4,8 @@
 #   make test   create or update the environment and run the whole test suite
 # and the course website:
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
+# and the instructor's kit:
+#   make assignments   build every graded assignment into dist/assignments/<name>/
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -13,14 +15,15 @@ ARGS ?=
 # What each command installs on top of the package (extras of pyproject.toml): a student's
 # `make lab` needs the package and JupyterLab only; the others add what they use.
 extras_lab := lab
-extras_test := lab,test,docs,bench
+extras_test := lab,test,docs,bench,assignments
 extras_docs := docs
 extras_bench := bench
+extras_assignments := lab,assignments
 # MathJax for the website, served from the site itself (from the npm registry, checked by npm).
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
-.PHONY: lab test check lint bench docs mathjax clean
+.PHONY: lab test check lint bench docs mathjax assignments clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -47,6 +50,10 @@ mathjax: $(MATHJAX)
 docs: $(VENV)/.installed-docs $(MATHJAX)
 	$(BIN)/python tools/build_site.py
 
+# otter assign on every master notebook of assignments/, then its solutions graded (offline).
+assignments: $(VENV)/.installed-assignments
+	$(BIN)/python tools/assignments.py build
+
 lab: $(VENV)/.installed-lab
 	$(BIN)/pendulum-lab $(ARGS)
 
@@ -56,10 +63,11 @@ test: $(VENV)/.installed-test $(MATHJAX)
 	$(BIN)/python tools/run_tests.py
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
-# the notebooks, the browser, the website or Binder (docs/testing.md).
+# the notebooks, the browser, the website, Binder or the graded assignments (docs/testing.md).
 check: $(VENV)/.installed-test
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder
+	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder \
+		--ignore=tests/assignments
 
 bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/run.py

@@ -1,4 +1,4 @@
-"""Bad input to the public functions of issue 12: a clear error naming the argument.
+"""Bad input to the public functions of the geometric layer: a clear error naming the argument.
 
 Each case names the argument (or the model's problem) and what is accepted; the
 last test shows that the same functions accept the valid neighbours of these

@@ -1,9 +1,8 @@
 """What the package is compiling, said while it compiles.
 
-Numba compiles a kernel or a time loop the first time it is used on a machine (seconds, up to
-half a minute on a loaded machine) and loads it from the disk cache in later sessions (a
-fraction of a second). Every place that does so wraps the work in :func:`compiling`, which
-tells two kinds of audience:
+Numba compiles a kernel or a time loop the first time it is used on a machine and loads it from
+the disk cache in later processes, which is much quicker. Every place that does either wraps
+the work in :func:`compiling`, which tells two kinds of audience:
 
 * **Listeners** (:func:`listen`): functions called with a :class:`Compilation` when a
   compilation starts and when it ends, in the thread that compiles, before the work begins
@@ -104,7 +103,7 @@ class Compilation:
             return f"compiling {what} failed after {seconds:.1f} s"
         if self.loading:
             return f"loaded {what} from the disk cache in {seconds:.1f} s"
-        return (f"compiled {what} in {seconds:.1f} s (once per machine: later sessions load it "
+        return (f"compiled {what} in {seconds:.1f} s (once per machine: from now on it loads "
                 "from the disk cache)")
 
 

@@ -327,7 +327,8 @@ def _lane_source(parameters: list[str], unpack: list[str], hamilton: list[str],
     the C library's sines and cosines, for what the lane loop does not serve.
     That is fewer columns than one vector pass (``LANE_GROUP``): as scalar
     code the lane functions always reduce and evaluate both series, which
-    made ``glrk4``'s two stages 14-17 % slower than the C library. And it is
+    costs more than the C library's sines for small arguments
+    (docs/design/stage-kernel.md). And it is
     a column where an argument of a sine or cosine exceeds the lane
     functions' range (``LIMIT``): then all columns are evaluated again, since
     a branch per column inside the loop would stop the vectorization. The
