@@ -1,5 +1,6 @@
 # The two commands of the README:
 #   make lab    create the environment if needed and open JupyterLab on the course
+#               (options for JupyterLab: make lab ARGS="--no-browser --port 8899")
 #   make test   create or update the environment and run the whole test suite
 # and the course website:
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
@@ -8,16 +9,29 @@
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
+# Passed to `pendulum-lab` by `make lab` (its options, then JupyterLab's after `--`).
+ARGS ?=
+
+# What each command installs on top of the package (extras of pyproject.toml): a student's
+# `make lab` needs the package and JupyterLab only; the others add what they use.
+extras_lab := lab
+extras_test := lab,test,docs,bench,assignments
+extras_docs := docs
+extras_bench := bench
+extras_assignments := lab,assignments
 # MathJax for the website, served from the site itself (from the npm registry, checked by npm).
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
 .PHONY: lab test check lint bench docs mathjax assignments clean
 
-$(BIN)/.installed: pyproject.toml
+$(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e ".[lab,test,docs,bench,assignments]"
+
+# One stamp per set of extras, made again when pyproject.toml changes.
+$(VENV)/.installed-%: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -e ".[$(extras_$*)]"
 	touch $@
 
 # The browser build of MathJax (es5/), without the SVG output and the other combined files.
@@ -33,29 +47,29 @@ $(MATHJAX):
 
 mathjax: $(MATHJAX)
 
-docs: $(BIN)/.installed $(MATHJAX)
+docs: $(VENV)/.installed-docs $(MATHJAX)
 	$(BIN)/python tools/build_site.py
 
 # otter assign on every master notebook of assignments/, then its solutions graded (offline).
-assignments: $(BIN)/.installed
+assignments: $(VENV)/.installed-assignments
 	$(BIN)/python tools/assignments.py build
 
-lab: $(BIN)/.installed
-	$(BIN)/pendulum-lab
+lab: $(VENV)/.installed-lab
+	$(BIN)/pendulum-lab $(ARGS)
 
 # Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one).
-test: $(BIN)/.installed $(MATHJAX)
+test: $(VENV)/.installed-test $(MATHJAX)
 	$(BIN)/ruff check .
 	$(BIN)/python tools/run_tests.py
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
 # the notebooks, the browser, the website, Binder or the graded assignments (docs/testing.md).
-check: $(BIN)/.installed
+check: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder \
 		--ignore=tests/assignments
 
-bench: $(BIN)/.installed
+bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/run.py
 
 clean:

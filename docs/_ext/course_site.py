@@ -18,10 +18,19 @@ What it adds to Sphinx + MyST-NB + sphinx-book-theme (see docs/README.md for the
 * **Re-execution when the package changes.** The execution cache keys on the notebooks' code
   only; a fingerprint of ``pendulum_lab``'s source files is kept beside it, and when it changes
   the cache is emptied and every notebook is read again, so no page shows outputs of older code.
-* **The course map** (directive ``course-map``): the notebooks found in ``notebooks/``, in
-  reading order, each with its title and first sentence.
+* **The course's table of contents.** The notebooks of the course and their order are the rows
+  of the table in ``course_table_of_contents`` (conf.py: the table "What the course covers" of
+  ``notebooks/00_start_here.ipynb``, which students read too). The directive
+  ``course-toctree`` makes the site's navigation from it; a notebook in ``notebooks/`` that the
+  table does not list, or a row without its notebook, stops the build before anything runs.
+* **The course map** (directive ``course-map``): the notebooks of the table, in its order, each
+  with its title and first sentence.
+* **Progress.** Each notebook says when its reading starts (executed, or taken from the
+  execution cache) and how it ended, with a count, on standard error as it happens (also from
+  the parallel readers, whose Sphinx messages arrive only when their batch is done).
 * **The course plan** (directive ``course-plan``): notebooks with the time to learn and the
-  necessary prerequisites their headers state, and the total time (the instructors' page).
+  necessary prerequisites their headers state, in the table of contents's order, and the total
+  time (the instructors' page).
 * **API pages**: one page per public module of the package, found by walking it.
 """
 
@@ -34,12 +43,16 @@ import json
 import pkgutil
 import re
 import shutil
+import sys
 import time
 from pathlib import Path
 
 from docutils import nodes
 from docutils.parsers.rst import Directive
+from docutils.statemachine import StringList
 from sphinx import addnodes
+from sphinx.directives.other import TocTree
+from sphinx.errors import ExtensionError
 from sphinx.util import logging
 
 logger = logging.getLogger(__name__)
@@ -48,6 +61,7 @@ WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 PICTURE_TYPES = ("image/png", "image/jpeg", "image/gif", "image/svg+xml")
 NOTEBOOK_FOLDER = "notebooks"
 FINGERPRINT_FILE = ".package-fingerprint"
+PROGRESS_FILE = ".notebooks-started"
 
 _IMG_TAG = re.compile(r"<img\b[^>]*>", re.IGNORECASE)
 _ALT_VALUE = re.compile(r"""\balt\s*=\s*("([^"]*)"|'([^']*)'|([^\s>"']+))""", re.IGNORECASE)
@@ -392,6 +406,139 @@ def outdated_notebooks(app, env, added, changed, removed):
     return [doc for doc in env.found_docs if env.doc2path(doc).suffix == ".ipynb"]
 
 
+# ------------------------------------------------------------------------------ contents
+#: A row of the table of contents: ``| `00_start_here` | what it is about |``.
+_CONTENTS_ROW = re.compile(r"^\|\s*`(\d\d[a-z]?_\w+)`\s*\|", re.MULTILINE)
+
+
+def table_of_contents(path: Path) -> list[str]:
+    """The notebook names (without ``.ipynb``) that the table in the notebook ``path`` lists,
+    in its order: the rows of its Markdown cells whose first column is a name in backticks.
+
+    >>> import json, tempfile
+    >>> cell = {"cell_type": "markdown", "source": "| `00_a` | first |\\n| `01b_c` | next |"}
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "00_a.ipynb"
+    ...     _ = path.write_text(json.dumps({"cells": [cell]}))
+    ...     table_of_contents(path)
+    ['00_a', '01b_c']
+    """
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    names = []
+    for cell in cells:
+        if cell["cell_type"] == "markdown":
+            names += _CONTENTS_ROW.findall("".join(cell["source"]))
+    return list(dict.fromkeys(names))
+
+
+def _contents_path(app) -> Path | None:
+    """The notebook holding the table of contents, or None for a site without the course."""
+    name = app.config.course_table_of_contents.strip()
+    return Path(app.srcdir) / name if name else None
+
+
+def course_notebooks(app) -> list[str]:
+    """The course's notebooks as documents (``notebooks/NAME``), in the table's order."""
+    path = _contents_path(app)
+    if path is None or not path.is_file():
+        return []
+    return [f"{NOTEBOOK_FOLDER}/{name}" for name in table_of_contents(path)]
+
+
+def check_contents(app) -> None:
+    """Stop the build if ``notebooks/`` and the table of contents disagree (before any notebook
+    runs): an unlisted notebook would be published as a page nobody navigates to."""
+    folder = Path(app.srcdir) / NOTEBOOK_FOLDER
+    path = _contents_path(app)
+    if path is None or not folder.is_dir():
+        return
+    if not path.is_file():
+        raise ExtensionError(f"the course's table of contents {path} does not exist: set "
+                             "course_table_of_contents in conf.py to the notebook that has it")
+    listed = table_of_contents(path)
+    present = sorted(p.stem for p in folder.glob("*.ipynb"))
+    problems = []
+    unlisted = [name for name in present if name not in listed]
+    if unlisted:
+        problems.append(f"{', '.join(n + '.ipynb' for n in unlisted)} in {NOTEBOOK_FOLDER}/ "
+                        f"{'is' if len(unlisted) == 1 else 'are'} not in the course's table "
+                        f"of contents ({path.name}): add a row for each notebook of the course "
+                        "there, or move the others out of the folder")
+    missing = [name for name in listed if name not in present]
+    if missing:
+        problems.append(f"the table of contents ({path.name}) lists {', '.join(missing)}, "
+                        f"which {NOTEBOOK_FOLDER}/ does not have")
+    if problems:
+        raise ExtensionError("; ".join(problems))
+
+
+class CourseToctree(TocTree):
+    """The ``toctree`` of the course's notebooks, in the order of its table of contents.
+
+    Takes the options of ``toctree`` (``:hidden:``, ``:caption:``); the entries come from the
+    table (:func:`course_notebooks`), never from the directive's content.
+    """
+
+    has_content = False
+
+    def run(self):
+        env = self.state.document.settings.env
+        path = _contents_path(env.app)
+        if path is not None and path.is_file():
+            env.note_dependency(str(path))
+        self.content = StringList([f"/{doc}" for doc in course_notebooks(env.app)])
+        return super().run()
+
+
+# ------------------------------------------------------------------------------ progress
+#: When this process started reading each notebook (a parallel reader reads several in turn).
+_READING_SINCE: dict[str, float] = {}
+
+
+def _notebook_documents(app) -> list[str]:
+    return sorted(doc for doc in app.env.found_docs if app.env.doc2path(doc).suffix == ".ipynb")
+
+
+def _say(text: str) -> None:
+    # Straight to standard error: Sphinx holds a parallel reader's messages until its batch
+    # of documents is done, which is what made a long build silent.
+    sys.stderr.write(text + "\n")
+    sys.stderr.flush()
+
+
+def reset_progress(app) -> None:
+    """Start the count of notebooks read in this build."""
+    (Path(app.outdir).parent / PROGRESS_FILE).unlink(missing_ok=True)
+
+
+def announce_notebook(app, docname: str, source: list) -> None:
+    """Say which notebook is read now, and how many have started (readers run in parallel)."""
+    if app.env.doc2path(docname).suffix != ".ipynb":
+        return
+    log = Path(app.outdir).parent / PROGRESS_FILE
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with open(log, "a", encoding="utf-8") as handle:  # one short append: atomic
+        handle.write(docname + "\n")
+    started = len(log.read_text(encoding="utf-8").splitlines())
+    total = len(_notebook_documents(app))
+    _READING_SINCE[docname] = time.monotonic()
+    _say(f"[{started}/{total}] {docname}: executing (unless the execution cache has it)…")
+
+
+def notebook_read(app, doctree) -> None:
+    """Say how the notebook's reading ended: executed in so many seconds, or from the cache."""
+    docname = app.env.docname
+    if app.env.doc2path(docname).suffix != ".ipynb":
+        return
+    from myst_nb.sphinx_ import NbMetadataCollector
+
+    data = NbMetadataCollector.get_doc_data(app.env).get(docname, {}).get("exec_data") or {}
+    ran = bool(data.get("mtime") and data["mtime"] >= getattr(app, "course_build_started", 0))
+    seconds = time.monotonic() - _READING_SINCE.pop(docname, time.monotonic())
+    how = f"executed in {data.get('runtime') or 0:.1f} s" if ran else "taken from the cache"
+    _say(f"      {docname}: {how} ({seconds:.1f} s in all)")
+
+
 # ------------------------------------------------------------------------------ course map
 def _first_sentence(text: str) -> str:
     text = " ".join(text.split())
@@ -417,13 +564,13 @@ def notebook_summary(path: Path) -> tuple[str, str]:
 
 
 class CourseMap(Directive):
-    """A table of the notebooks in reading order: number, title (linked), first sentence."""
+    """A table of the notebooks in reading order (the table of contents's): number, title
+    (linked), first sentence."""
 
     has_content = False
 
     def run(self):
         env = self.state.document.settings.env
-        folder = Path(env.srcdir) / NOTEBOOK_FOLDER
         table = nodes.table(classes=["course-map"])
         group = nodes.tgroup(cols=2)
         table += group
@@ -434,7 +581,8 @@ class CourseMap(Directive):
         head += self._row(nodes.Text("notebook"), nodes.Text("what it is about"))
         body = nodes.tbody()
         group += body
-        for path in sorted(folder.glob("*.ipynb")):
+        for document in course_notebooks(env.app):
+            path = Path(env.srcdir) / f"{document}.ipynb"
             env.note_dependency(str(path))
             title, sentence = notebook_summary(path)
             link = addnodes.pending_xref(
@@ -496,7 +644,8 @@ def notebook_plan(path: Path) -> tuple[str | None, list[str]]:
 
 
 class CoursePlan(Directive):
-    """Notebooks with their time to learn and necessary prerequisites, read from their headers.
+    """Notebooks with their time to learn and necessary prerequisites, read from their headers,
+    in the order of the table of contents.
 
     Option ``notebooks``: the notebooks to list, by the start of their file names
     (``:notebooks: 00 01 01a``); all of them by default. Under the table, the sum of the times
@@ -509,7 +658,9 @@ class CoursePlan(Directive):
     def run(self):
         env = self.state.document.settings.env
         folder = Path(env.srcdir) / NOTEBOOK_FOLDER
-        paths = sorted(folder.glob("*.ipynb"))
+        # The table of contents's order (the build has checked it lists every notebook).
+        paths = [Path(env.srcdir) / f"{doc}.ipynb" for doc in course_notebooks(env.app)]
+        paths = paths or sorted(folder.glob("*.ipynb"))
         if "notebooks" in self.options:
             wanted = self.options["notebooks"].split()
             paths = [path for path in paths if path.stem.split("_", 1)[0] in wanted]
@@ -559,13 +710,19 @@ def setup(app):
     app.add_config_value("course_widgets_without_picture", {}, "env", types=(dict,))
     app.add_config_value("course_api_folder", "reference", "env", types=(str,))
     app.add_config_value("course_api_package", "pendulum_lab", "env", types=(str,))
+    app.add_config_value("course_table_of_contents", "", "env", types=(str,))
     app.connect("config-inited", configure_launch, priority=100)
+    app.connect("builder-inited", check_contents)
+    app.connect("builder-inited", reset_progress)
     app.connect("builder-inited", check_package)
     app.connect("builder-inited", write_api_pages)
     app.connect("env-get-outdated", outdated_notebooks)
     app.connect("doctree-read", replace_widgets)
     app.connect("doctree-read", fill_alt_text)
+    app.connect("source-read", announce_notebook)
+    app.connect("doctree-read", notebook_read)
     app.connect("build-finished", write_execution_report)
     app.add_directive("course-map", CourseMap)
+    app.add_directive("course-toctree", CourseToctree)
     app.add_directive("course-plan", CoursePlan)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

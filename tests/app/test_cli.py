@@ -4,6 +4,9 @@ JupyterLab is never started here: the command is built by ``lab_command`` and ``
 replaced by a recorder.
 """
 
+import importlib.util
+import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -242,3 +245,42 @@ def test_warm_up_reaches_the_variational_kernels_and_the_standard_map():
         counts[which] = tuple(int(x) for x in done.stdout.split())
     assert counts["all"] == (1, 2)  # the map's loop and both rules' discrete kernels
     assert counts["rk4"] == (0, 0)  # negative control: one method compiles neither
+
+
+# --------------------------------------------------------------------------- make lab ARGS=...
+REPO = Path(__file__).resolve().parents[2]
+
+
+def make_lab_command(venv: Path, *arguments: str) -> list[str]:
+    """The commands ``make lab ...`` would run (``make -n``) with an installed fake venv."""
+    (venv / "bin").mkdir(parents=True, exist_ok=True)
+    (venv / "bin" / "python").touch()
+    (venv / ".installed-lab").touch()  # newer than pyproject.toml: nothing to install
+    done = subprocess.run(["make", "-n", "lab", f"VENV={venv}", *arguments], cwd=REPO,
+                          capture_output=True, text=True, timeout=60, check=True)
+    return done.stdout.strip().splitlines()
+
+
+@pytest.mark.skipif(shutil.which("make") is None or not (REPO / "Makefile").is_file(),
+                    reason="needs make and the repository's Makefile")
+def test_make_lab_passes_args_through_pendulum_lab_to_jupyterlab(tmp_path, monkeypatch,
+                                                                 recorded):
+    venv = tmp_path / "venv"
+    lines = make_lab_command(venv, "ARGS=--no-browser --port 8899 -- --allow-root")
+    assert len(lines) == 1, lines  # no install step, only the launcher
+    launcher, *argv = shlex.split(lines[0])
+    assert launcher == f"{venv}/bin/pendulum-lab"
+    assert argv == ["--no-browser", "--port", "8899", "--", "--allow-root"]
+    # what pendulum-lab then starts, from this checkout
+    if importlib.util.find_spec("jupyterlab") is None:
+        pytest.skip("JupyterLab is not installed: the launcher would refuse to start it")
+    monkeypatch.setattr(cli, "checkout_notebooks", lambda: tmp_path)
+    assert cli.main(argv) == 0
+    (command,) = recorded
+    assert "--no-browser" in command and "--port=8899" in command
+    assert command[-1] == "--allow-root"
+    # negative control: without ARGS the launcher gets no options and JupyterLab none of them
+    assert shlex.split(make_lab_command(venv)[0]) == [f"{venv}/bin/pendulum-lab"]
+    assert cli.main([]) == 0
+    assert "--no-browser" not in recorded[1] and not any(a.startswith("--port")
+                                                          for a in recorded[1])

@@ -275,11 +275,21 @@ def _add_lab_command(subparsers) -> None:
     lab.set_defaults(handler=run_lab)
 
 
+def _progress_lines(done: int, total: int, what: str) -> None:
+    """``pendulum-lab warmup --progress lines``: one line per job (``warmup.PROGRESS_LINE``)."""
+    print(f"{done}/{total} {what}", flush=True)
+
+
 def run_warmup(args) -> int:
     """Compile the numerical kernels now instead of on first use."""
     from .warmup import warm_up
 
-    seconds = warm_up(ns=args.n)
+    progress = {"bar": True, "lines": _progress_lines, "none": False}[args.progress]
+    try:
+        seconds = warm_up(ns=args.n, methods=args.methods, progress=progress)
+    except (TypeError, ValueError) as err:
+        print(f"pendulum-lab warmup: {err}", file=sys.stderr)
+        return 2
     print(f"pendulum_lab kernels ready for chains of {args.n} link(s) ({seconds:.1f} s)")
     return 0
 
@@ -293,6 +303,11 @@ def _add_warmup_command(subparsers) -> None:
     )
     warm.add_argument("--n", type=int, nargs="+", default=[1, 2], metavar="N",
                       help="chain lengths (numbers of links) to prepare (default: 1 2)")
+    warm.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
+                      help="methods to prepare (default: all of them)")
+    warm.add_argument("--progress", choices=("bar", "lines", "none"), default="bar",
+                      help="a progress bar (default), one line 'DONE/TOTAL WHAT' per job "
+                      "(for a program to read), or nothing")
     warm.set_defaults(handler=run_warmup)
 
 

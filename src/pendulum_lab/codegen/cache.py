@@ -35,6 +35,8 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from .compile_status import compiling
+
 __all__ = [
     "MODULE_PREFIX",
     "PACKAGE",
@@ -202,7 +204,8 @@ def _write_if_changed(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-def load_generated(stem: str, source: str, inject: dict | None = None):
+def load_generated(stem: str, source: str, inject: dict | None = None,
+                   what: str | None = None):
     """Write generated Python ``source`` into the kernel cache folder (if new) and import it.
 
     The file is ``<stem>_<key>.py`` with the key of :func:`code_key` (the calling module counts
@@ -211,6 +214,11 @@ def load_generated(stem: str, source: str, inject: dict | None = None):
     stay the objects that other generated code imports by name). ``inject`` sets module globals
     before the source runs (objects that cannot be imported by name). Returns
     ``(module, path)``.
+
+    Running the module compiles its kernels (their Numba signatures are given) or loads them
+    from Numba's disk cache; that is announced as a compilation of ``what`` (for people:
+    "glrk4 for the double pendulum"; by default the stem), expected to load when the file
+    was already there (:func:`~pendulum_lab.codegen.compile_status.compiling`).
     """
     caller = inspect.currentframe().f_back
     generator = caller.f_globals.get("__name__") if caller is not None else None
@@ -220,6 +228,7 @@ def load_generated(stem: str, source: str, inject: dict | None = None):
     with _LOADING:  # one thread builds a module; the others wait and get the finished one
         if name in sys.modules:
             return sys.modules[name], path
+        seen_before = path.exists()
         _write_if_changed(path, source)
         spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
@@ -228,7 +237,8 @@ def load_generated(stem: str, source: str, inject: dict | None = None):
         # function's file through its module. Removed again if it fails.
         sys.modules[name] = module
         try:
-            spec.loader.exec_module(module)
+            with compiling(what or f"the generated module {stem}", loading=seen_before):
+                spec.loader.exec_module(module)
         except BaseException:
             del sys.modules[name]
             raise

@@ -46,7 +46,8 @@ def _henon_kernel(n: int, forced: bool, link: int):
     kernels = codegen.load_kernels(n, forced)
     stem = kernels.module.removeprefix("pendulum_lab_kernels_")
     module, _ = load_generated(
-        f"henon_{stem}_link{link}", _HENON_SOURCE.format(kernels=kernels.module, n=n, link=link)
+        f"henon_{stem}_link{link}", _HENON_SOURCE.format(kernels=kernels.module, n=n, link=link),
+        what=f"Henon's rescaled field of {kernels.description}",
     )
     return module.rescaled
 
@@ -173,8 +174,9 @@ def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, m
     p_ext = np.column_stack([p, width])
     # not separable, and any damping is part of the rescaled field (no conformal splitting)
     kernel = _henon_kernel(n, model.forced, link)
+    name = f"Henon's rescaled field of {field.name}"
     rescaled = HamiltonianField(kernel, field.acceleration, field.params, False, 0.0,
-                                stages=codegen.stage_kernel(kernel))
+                                stages=codegen.stage_kernel(kernel, name), name=name)
     compile_method(method, rescaled, n + 1).step_rows(q_ext, p_ext, 1.0,
                                                       "Henon's step to the surface")
     if not np.all(np.isfinite(q_ext)) or not np.all(np.isfinite(p_ext)):

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
+from numba import types
 
 from ..codegen.cache import load_generated
 from ..codegen.kernels import import_name
@@ -47,6 +48,7 @@ from ..integrators import (
 
 __all__ = [
     "CALLS",
+    "RUN",
     "NOT_CONVERGED",
     "NOT_FINITE",
     "RUNNING",
@@ -65,6 +67,14 @@ RUNNING, NOT_FINITE, NOT_CONVERGED = 0, 1, 2
 STEPS, SWEEPS, CALLS, STATUS = 0, 1, 2, 3
 #: Ensembles at least this large are split across threads.
 PARALLEL_MIN_MEMBERS = 64
+_ROWS, _ROW = types.float64[:, ::1], types.float64[::1]
+#: The Numba type of every compiled loop ``run`` (the generated module's): ``(separable,
+#: damping_rates, q, p, t0, h, n_steps, first_step, save_every, params, saved_q, saved_p,
+#: stats, memory)``, C arrays. Given, so that the loop is compiled (or loaded) when its
+#: module is made, in :func:`compile_method`, and never on a run's first call.
+RUN = types.void(types.boolean, _ROW, _ROWS, _ROWS, types.float64, types.float64, types.int64,
+                 types.int64, types.int64, _ROWS, types.float64[:, :, ::1],
+                 types.float64[:, :, ::1], types.int64[:, ::1], _ROWS)
 
 
 @numba.njit
@@ -164,7 +174,7 @@ The step ({step}) is set by pendulum_lab.driver.loops before this runs.
 import numba
 
 from pendulum_lab.codegen.lowlevel import align_stack
-from pendulum_lab.driver.loops import time_loop
+from pendulum_lab.driver.loops import RUN, time_loop
 from {first_module} import {first_name} as first_kernel
 from {second_module} import {second_name} as second_kernel
 
@@ -172,7 +182,7 @@ from {second_module} import {second_name} as second_kernel
 COORDINATES = {n}
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(RUN, cache=True, nogil=True)
 def run(separable, damping_rates, q, p, t0, h, n_steps, first_step, save_every, params, saved_q,
         saved_p, stats, memory):
     """time_loop(step, first_kernel, second_kernel, ...) with this module's step and kernels."""
@@ -201,11 +211,12 @@ def loop_source(method: Method, first, second, n: int) -> str:
 
 
 @functools.cache
-def _load(method: Method, step: Step, first, second, n: int):
+def _load(method: Method, step: Step, first, second, n: int, field_name: str):
     stem = first.py_func.__module__.removeprefix("pendulum_lab_kernels_")
     stem = f"{stem}_{re.sub(r'[^A-Za-z0-9_]', '_', method.name)}"
     module, _ = load_generated(stem, loop_source(method, first, second, n),
-                               inject={"step": step.compiled})
+                               inject={"step": step.compiled},
+                               what=f"{method.name} for {field_name}")
     return module.run
 
 
@@ -279,11 +290,16 @@ def compile_method(method: Method, field: HamiltonianField, n: int) -> CompiledM
     """``method`` compiled with the kernels it takes from ``field``, for ``n`` coordinates.
 
     The loop is made on first use (compiled once per machine, then loaded from disk) and
-    kept for the life of the process. The caller has checked that ``method`` can integrate ``field``
+    kept for the life of the process; all of that happens here, announced as the compilation
+    of "``method`` for ``field.name``" (:mod:`pendulum_lab.codegen.compile_status`: a note after
+    :data:`~pendulum_lab.codegen.compile_status.NOTE_DELAY` seconds, or the listeners of the
+    calling thread), so that running the result compiles nothing. The caller has checked that
+    ``method`` can integrate ``field``
     (:func:`~pendulum_lab.integrators.unsuitability`).
     """
     first, second = step_kernels(method, field)
-    return CompiledMethod(method, field, n, _load(method, method.kernel, first, second, n))
+    run = _load(method, method.kernel, first, second, n, field.name)
+    return CompiledMethod(method, field, n, run)
 
 
 @functools.cache

@@ -37,6 +37,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .. import validation as check
+from ..codegen.compile_status import compile_seconds
 from ..model import PendulumModel
 from .loops import compile_method
 from .simulate import (
@@ -135,6 +136,9 @@ class SegmentedRun:
         Implicit-solver iterations so far, summed over members.
     wall_time : float
         Seconds spent stepping.
+    compile_time : float
+        Seconds spent before stepping on compiling (or loading) the kernels and the time
+        loop; 0 when they were ready (see ``Trajectory.compile_time``).
     """
 
     def __init__(self, model, theta0, start, given_momenta: bool, *, method, dt: float,
@@ -150,9 +154,11 @@ class SegmentedRun:
         # What the method carries from step to step (its last stage slopes, the
         # rounding it compensates): kept across segments, so that the segmented
         # run is the one long run to the last bit.
+        compiled_before = compile_seconds()
         field = hamiltonian_field(self.model)
         check_method_fits(model, method, field)
         self._compiled = compile_method(method, field, model.n)
+        self.compile_time = compile_seconds() - compiled_before
         self._memory = self._compiled.new_memory(self._theta.shape[0])
         self.members = np.arange(self._theta.shape[0])
         self.done = 0

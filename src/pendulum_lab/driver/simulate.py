@@ -12,6 +12,7 @@ rule that turns ``t_end`` and ``dt`` into a number of steps.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 import warnings
@@ -21,6 +22,7 @@ import numpy as np
 
 from .. import validation as check
 from ..codegen import kernels as codegen
+from ..codegen.compile_status import compile_seconds
 from ..integrators import (
     MAX_SWEEPS,
     ConvergenceError,
@@ -97,6 +99,10 @@ class Trajectory:
     completed : bool
         False if some trajectory reached a non-finite state (it then stops
         there; in an ensemble its later entries are NaN).
+    compile_time : float
+        Seconds the run spent before stepping on compiling its kernels and its time loop, or
+        loading them from the disk cache (:mod:`pendulum_lab.codegen.compile_status`); 0 when
+        this process had them ready. Not part of ``wall_time``.
     """
 
     t: np.ndarray
@@ -112,6 +118,7 @@ class Trajectory:
     evaluations: int
     wall_time: float
     completed: bool
+    compile_time: float = 0.0
 
     @property
     def energy_error(self) -> np.ndarray:
@@ -133,7 +140,7 @@ def _field(n: int, forced: bool, params: tuple, separable: bool,
     discrete = None if forced else functools.partial(codegen.load_discrete_kernels, n)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
                             np.array(params, dtype=float), separable, damping_rate, discrete,
-                            kernels.stages)
+                            kernels.stages, kernels.description)
 
 
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
@@ -152,7 +159,7 @@ def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
                             np.ascontiguousarray(rows.reshape(-1, rows.shape[-1])),
                             model.separable, np.array(rates, dtype=float).reshape(-1),
-                            stages=kernels.stages)
+                            stages=kernels.stages, name=kernels.description)
 
 
 def check_method_fits(model: PendulumModel, method: Method, field: HamiltonianField) -> None:
@@ -456,6 +463,7 @@ def simulate(
     method, theta0, start, (t_end, dt, n_steps), save_every, t0 = run_arguments(
         model, theta0, omega0, p0, t_end, dt, method, save_every, t0
     )
+    compiled_before = compile_seconds()
     if check.choice("keep", keep, ("all", "final")) == "final":
         if save_every != 1:
             raise ValueError("give `save_every` only with keep='all' (keep='final' keeps the "
@@ -470,9 +478,11 @@ def simulate(
     q = theta0.reshape(-1, model.n).copy()
     y = to_method_variables(row_models, method, q, start.reshape(-1, model.n),
                              given_momenta=p0 is not None)
-    return integrate(model, compile_method(method, field, model.n), q, y, theta0.shape[:-1],
-                     t_end=t_end, dt=dt, n_steps=n_steps, save_every=save_every, t0=t0,
-                     progress=progress)
+    compiled = compile_method(method, field, model.n)
+    compile_time = compile_seconds() - compiled_before
+    trajectory = integrate(model, compiled, q, y, theta0.shape[:-1], t_end=t_end, dt=dt,
+                           n_steps=n_steps, save_every=save_every, t0=t0, progress=progress)
+    return dataclasses.replace(trajectory, compile_time=compile_time)
 
 
 def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape: tuple, *,

@@ -39,6 +39,9 @@ class HamiltonianField:
         ``hamilton`` at several states at once (see
         :mod:`pendulum_lab.codegen.signatures`), for the implicit Runge-Kutta
         methods; without it they cannot integrate the field.
+    name : str
+        What the field describes, for people ("the double pendulum"): messages about
+        compiling a method for it say so.
     """
 
     hamilton: object
@@ -48,3 +51,4 @@ class HamiltonianField:
     damping_rate: float | np.ndarray = 0.0
     discrete: object = field(default=None, repr=False)
     stages: object = field(default=None, repr=False)
+    name: str = "a vector field"

@@ -1,0 +1,71 @@
+"""A compilation's note in a real JupyterLab in Chromium (``pendulum_lab.codegen.compile_status``).
+
+The demo notebook ``compile_demo/compile_note.ipynb`` announces a block of 3 s as a compilation
+and another of 0.05 s. While the long one runs, its cell must show one line that says what is
+compiled and counts the seconds, updated in place; when it is done, the line says how long it
+took; the short one shows nothing.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from pathlib import Path
+
+import pytest
+from lab_harness import NotebookRunner
+
+pytestmark = pytest.mark.browser
+
+DEMO = Path(__file__).resolve().parent / "compile_demo"
+NOTEBOOK = "compile_note.ipynb"
+RUNNING = re.compile(r"compiling a demonstration kernel, once per machine… (\d+) s")
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    runner = NotebookRunner(lambda: tmp_path_factory.mktemp("compile-lab"))
+    previous = os.environ.get("PENDULUM_LAB_NOTEBOOKS")
+    os.environ["PENDULUM_LAB_NOTEBOOKS"] = str(DEMO)
+    try:
+        runner.start()
+        yield runner, runner.get(NOTEBOOK)
+    finally:
+        if previous is None:
+            os.environ.pop("PENDULUM_LAB_NOTEBOOKS", None)
+        else:
+            os.environ["PENDULUM_LAB_NOTEBOOKS"] = previous
+        runner.close()
+
+
+def outputs(runner, run) -> list[str]:
+    return [cell.get("outputText", "") for cell in runner.cells(run)]
+
+
+def test_the_note_ends_with_the_time_taken_and_a_quick_one_says_nothing(lab):
+    runner, run = lab
+    if not run.ok:
+        pytest.fail(run.report(), pytrace=False)
+    text = "\n".join(outputs(runner, run))
+    assert re.search(r"compiled a demonstration kernel in 3\.\d s", text), text
+    assert not RUNNING.search(text)  # the line was replaced, not followed by another
+    assert text.count("a demonstration kernel") == 1
+    assert "the quick one is done" in text and "a quick kernel" not in text
+
+
+def test_while_it_compiles_the_cell_counts_the_seconds_in_one_line(lab):
+    runner, run = lab
+    busy_before = runner.state(run).get("busyCount", 0)
+    run.page.evaluate("() => { window.jupyterapp.commands.execute('notebook:run-all-cells'); }")
+    seen, deadline = [], time.monotonic() + 60
+    while time.monotonic() < deadline:
+        text = "\n".join(outputs(runner, run))
+        seen += [int(s) for s in RUNNING.findall(text)]
+        assert len(RUNNING.findall(text)) <= 1, text
+        if "the slow one is done" in text and seen:
+            break
+        time.sleep(0.2)
+    runner.wait_idle(run, timeout=60, min_busy=busy_before + 1)
+    assert len(set(seen)) >= 2, f"the elapsed seconds never moved: {seen}"
+    assert seen == sorted(seen)
