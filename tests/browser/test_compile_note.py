@@ -3,7 +3,9 @@
 The demo notebook ``compile_demo/compile_note.ipynb`` announces a block of 3 s as a compilation
 and another of 0.05 s. While the long one runs, its cell must show one line that says what is
 compiled and counts the seconds, updated in place; when it is done, the line says how long it
-took; the short one shows nothing.
+took; the short one shows nothing. Then an explorer's run compiles first: while it does, the
+explorer's status line says what is compiled and its figure is marked stale; afterwards the
+status line reports the run, with the compile time apart, and the figure is fresh again.
 """
 
 from __future__ import annotations
@@ -69,3 +71,33 @@ def test_while_it_compiles_the_cell_counts_the_seconds_in_one_line(lab):
     runner.wait_idle(run, timeout=60, min_busy=busy_before + 1)
     assert len(set(seen)) >= 2, f"the elapsed seconds never moved: {seen}"
     assert seen == sorted(seen)
+
+
+EXPLORER_STATE = """() => {
+  const lines = [...document.querySelectorAll('.plab-statusline')];
+  const line = lines[lines.length - 1];
+  const stale = [...document.querySelectorAll('.plab-stale')].length;
+  return {text: line ? line.querySelector('.plab-status-text').textContent : null,
+          kind: line ? line.dataset.kind : null, stale};
+}"""
+
+
+def test_an_explorer_says_it_compiles_and_marks_its_figure_stale_meanwhile(lab):
+    runner, run = lab
+    busy_before = runner.state(run).get("busyCount", 0)
+    run.page.evaluate("() => { window.jupyterapp.commands.execute('notebook:run-all-cells'); }")
+    states, deadline = [], time.monotonic() + 120
+    while time.monotonic() < deadline:
+        states.append(run.page.evaluate(EXPLORER_STATE))
+        if any("the explorer is updated" in text for text in outputs(runner, run)):
+            break
+        time.sleep(0.1)
+    runner.wait_idle(run, timeout=60, min_busy=busy_before + 1)
+    said = "compiling rk4 for the double pendulum"
+    compiling = [s for s in states if s["text"] and said in s["text"]]
+    assert compiling, f"the status line never said it compiles: {states[-5:]}"
+    assert all(s["kind"] == "busy" and s["stale"] >= 1 for s in compiling)
+    final = run.page.evaluate(EXPLORER_STATE)
+    # after the run: its summary with the compile time apart, and no stale figure
+    assert final["kind"] == "info" and "after compiling for 3." in final["text"], final
+    assert final["stale"] == 0

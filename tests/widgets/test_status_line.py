@@ -28,6 +28,32 @@ def test_the_status_line_is_busy_and_the_figure_stale_while_a_run_is_computed(mo
     assert status.STALE_CLASS not in ex.widget._dom_classes
 
 
+def test_a_compile_during_a_run_is_said_in_the_status_line_and_reported_apart(monkeypatch):
+    from pendulum_lab.codegen.compile_status import compiling
+
+    ex = widgets.explore(pl.double_pendulum(), t_end=2.0, method="rk4")
+    texts = []
+    run = SimulateCall.run
+
+    def compiles_first(call):
+        with compiling("rk4 for the double pendulum", loading=False):
+            texts.append((ex.status.kind, ex.status.text))
+        texts.append((ex.status.kind, ex.status.text))
+        return run(call)
+
+    monkeypatch.setattr(SimulateCall, "run", compiles_first)
+    ex.controls["theta1"].value = 0.4
+    during, after = texts
+    assert during[0] == "busy" and "compiling rk4 for the double pendulum" in during[1]
+    assert after == ("busy", "computing 200 steps of rk4 (dt = 0.01 s)…")
+    # negative control: without a compile, the status line never speaks of one
+    texts.clear()
+    monkeypatch.setattr(SimulateCall, "run", lambda call: texts.append(ex.status.text) or run(call))
+    ex.controls["theta1"].value = 0.5
+    assert texts and not any("compiling" in text for text in texts)
+    assert "compiling" not in ex.status.text
+
+
 def test_a_failed_run_ends_the_busy_state_with_its_error():
     ex = widgets.explore(pl.double_pendulum(), t_end=2.0, method="rk4")
     ex.controls["dt"].value = 0.0005

@@ -35,6 +35,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from ..codegen.compile_status import listen
 from ..driver.simulate import Trajectory, step_count
 from ..integrators import ConvergenceError
 from ..model.pendulum import PendulumModel
@@ -193,13 +194,16 @@ class Instrument(WidgetWithPicture):
         raise NotImplementedError
 
     def summary(self) -> str:
-        """The status line after a successful update: steps, method, time, and the energy:
+        """The status line after a successful update: steps, method, run time (and compile time
+        apart, when the run had to compile first), and the energy:
         its error where the model conserves it, its change (and why) where it does not."""
         traj = self.trajectory
         change = traj.energy_error
+        compiled = (f" (after compiling for {traj.compile_time:.1f} s, once per machine)"
+                    if traj.compile_time >= 0.05 else "")
         run = (
             f"{len(traj.t) - 1} steps of {traj.method.name} (dt = {traj.dt:g} s) in "
-            f"{traj.wall_time:.2f} s; E(0) = {traj.energy[0]:.4f} J, "
+            f"{traj.wall_time:.2f} s{compiled}; E(0) = {traj.energy[0]:.4f} J, "
         )
         if energy_is_conserved(self.model):
             return run + f"max |E − E(0)| = {float(np.max(np.abs(change))):.2e} J"
@@ -295,8 +299,12 @@ class Instrument(WidgetWithPicture):
                 warnings.simplefilter("always", RuntimeWarning)
                 call = self.prepare()
                 steps = step_count(call.t_end, call.dt)
-                with self.working(f"computing {steps} steps of {call.method} "
-                                  f"(dt = {call.dt:g} s)…"):
+                computing = f"computing {steps} steps of {call.method} (dt = {call.dt:g} s)…"
+
+                def say(event):  # a first use compiles before it computes: say which
+                    self.status.text = event.message if event.state == "started" else computing
+
+                with self.working(computing), listen(say):
                     trajectory = call.run()
         except EXPECTED_ERRORS as err:
             what = (
