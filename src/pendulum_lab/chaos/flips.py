@@ -32,9 +32,9 @@ __all__ = ["FlipMap", "can_flip", "flip_time_map", "flip_times"]
 # its steps (its first state repeats the previous segment's last, the velocities
 # and energies of its states, the copy of the cells still running), and arrays
 # of tens of MB are mapped and page-faulted afresh by every segment. In blocks
-# of 10,000 cells the segments have 26 steps, and that map took 38% less CPU
-# time (16 s of it in the kernel before, 2 s after); the times are the same to
-# the last bit.
+# of 10,000 cells the segments have 26 steps, the work per cell is a small part
+# of the map (docs/design/dask-ensembles.md), and the times are the same to the
+# last bit.
 BLOCK_CELLS = 10_000
 
 

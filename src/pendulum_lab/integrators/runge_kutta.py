@@ -77,8 +77,8 @@ def explicit_rk(hamilton, t, q, p, h, params, a, b, c, work):
 def stage_lanes(stages: int) -> int:
     """Columns of the states an implicit step hands the ``stages`` kernel.
 
-    A multiple of 8 from 3 stages on; one or two stages (``glrk4``) cost less
-    evaluated one by one than as 8 columns of which 6 are padding (measured).
+    A multiple of 8 from 3 stages on; one or two stages (``glrk4``) are evaluated as they
+    are, which is quicker than 8 columns of which 6 are padding (docs/design/stage-kernel.md).
     """
     if stages <= 2:
         return stages
@@ -111,8 +111,7 @@ def _combine_row(memory, row, columns, stages, lanes, out):
     The innermost loop runs over ``i``, so it vectorizes, and ``out`` is a stack buffer
     (:func:`~pendulum_lab.codegen.lowlevel.stack_floats`), which LLVM knows the loads from
     ``memory`` cannot see: written into ``memory`` directly, the sums must be stored and loaded
-    again for every ``j`` (glrk16's 4 x 8 x 8 took 66 ns a sweep as dot products per stage, 32
-    ns this way, in a micro-benchmark; a glrk16 run over 1000 s took 43.0 instead of 50.4 ms).
+    again for every ``j`` (the measurement is in docs/design/stage-kernel.md).
     """
     slope = memory[row]
     for i in range(lanes):

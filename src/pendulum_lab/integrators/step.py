@@ -22,8 +22,8 @@ __all__ = ["Step", "jit_step", "kernel_function"]
 #: compiled on its own with a kernel argument would hold a pointer to a Python
 #: object, which Numba cannot keep in its disk cache.) Helpers that take no
 #: kernel are plain ``numba.njit``: LLVM inlines them when the loop is linked,
-#: while Numba's own inlining copies the callee's IR at every call site (it
-#: made compiling the eight methods' loops 1.8 times slower, measured).
+#: while Numba's own inlining copies the callee's IR at every call site, which
+#: makes compiling the loops slower (docs/design/compiled-loop.md).
 kernel_function = numba.njit(inline="always")
 
 

@@ -52,8 +52,8 @@ def remove_damping(p, damping_rate, dp):
 
     A conformal Hamiltonian field has ``dp/dt = -H_q - gamma p`` [MP]; the
     symplectic steps below integrate ``-H_q`` and leave the damping to the
-    conformal methods' exact flow. They call this only when ``gamma != 0``
-    (a function call per evaluation would cost Hamiltonian fields 10 %).
+    conformal methods' exact flow. They call this only when ``gamma != 0``,
+    so that a Hamiltonian field pays no call per evaluation.
     """
     for i in range(p.size):
         dp[i] += damping_rate * p[i]

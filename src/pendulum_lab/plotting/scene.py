@@ -356,8 +356,8 @@ class PendulumScene:
 def encode_frame(canvas: FigureCanvasAgg, image_format: str) -> bytes:
     """The canvas's current pixels as ``"jpeg"`` or ``"png"`` bytes.
 
-    The matplotlib simulator sends JPEG: it encodes about four times faster
-    than PNG, which keeps a frame well within its 50 ms. The embedded frames
+    The matplotlib simulator sends JPEG, which encodes faster than PNG and keeps a
+    frame within its 50 ms (docs/design/explorer-redraw.md). The embedded frames
     of :func:`~pendulum_lab.animation.html_animation` are PNG reduced to 64
     colours, a third of the size of full-colour PNG for these line drawings.
     """

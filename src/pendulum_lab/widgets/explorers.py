@@ -127,10 +127,9 @@ def cheap_to_redraw(ax) -> None:
     """At most about five ticks on each linear axis of a live panel, and a fixed title height.
 
     Text is most of the cost of a redraw, and tick labels are most of the
-    text: with matplotlib's default density an explorer update took a third
-    longer. Log axes keep their own ticks. A title with an explicit height
-    skips matplotlib's search for a place above the tick labels (4 ms per
-    update); the explorers' titles are short, so nothing collides.
+    text (docs/design/explorer-redraw.md). Log axes keep their own ticks. A
+    title with an explicit height skips matplotlib's search for a place above
+    the tick labels; the explorers' titles are short, so nothing collides.
     """
     for axis in (ax.xaxis, ax.yaxis):
         if axis.get_scale() == "linear":
