@@ -1,21 +1,33 @@
 # The two commands of the README:
 #   make lab    create the environment if needed and open JupyterLab on the course
-#   make test   create or update the environment and run the whole test suite
+#   make test   create or update the environment and run the whole test suite, and the unit
+#               suite once more with the oldest supported versions (make test-floors)
 # and the course website:
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
+# The environment with every dependency at its floor in pyproject.toml (tools/floor_pins.py).
+FLOORS_VENV ?= .venv-floors
+FLOORS_BIN := $(FLOORS_VENV)/bin
 # MathJax for the website, served from the site itself (from the npm registry, checked by npm).
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
-.PHONY: lab test check lint bench docs mathjax clean
+.PHONY: lab test test-floors check lint bench docs mathjax clean
 
 $(BIN)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
 	$(BIN)/python -m pip install -e ".[lab,test,docs,bench]"
+	touch $@
+
+# The floors pinned, the test tools at their newest (the lab extra: the command line's tests).
+$(FLOORS_BIN)/.installed: pyproject.toml tools/floor_pins.py
+	$(PYTHON) -m venv $(FLOORS_VENV)
+	$(FLOORS_BIN)/python -m pip install --upgrade pip
+	$(FLOORS_BIN)/python tools/floor_pins.py > $(FLOORS_VENV)/floors.txt
+	$(FLOORS_BIN)/python -m pip install -e ".[lab,test]" -c $(FLOORS_VENV)/floors.txt
 	touch $@
 
 # The browser build of MathJax (es5/), without the SVG output and the other combined files.
@@ -37,10 +49,15 @@ docs: $(BIN)/.installed $(MATHJAX)
 lab: $(BIN)/.installed
 	$(BIN)/pendulum-lab
 
-# Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one).
-test: $(BIN)/.installed $(MATHJAX)
+# Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one); the
+# unit suite in the floor environment takes the core of the first to end.
+test: $(BIN)/.installed $(FLOORS_BIN)/.installed $(MATHJAX)
 	$(BIN)/ruff check .
-	$(BIN)/python tools/run_tests.py
+	$(BIN)/python tools/run_tests.py --floors $(FLOORS_BIN)/python
+
+# The unit suite (as make check) with the oldest supported versions: the floors of pyproject.toml.
+test-floors: $(FLOORS_BIN)/.installed
+	$(FLOORS_BIN)/python tools/run_tests.py --floors-only
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
 # the notebooks, the browser, the website or Binder (docs/testing.md).
@@ -52,4 +69,5 @@ bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/run.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache docs/_build docs/_vendor docs/reference
+	rm -rf $(VENV) $(FLOORS_VENV) .venv-floors-caches .pytest_cache docs/_build docs/_vendor \
+		docs/reference

@@ -22,17 +22,19 @@ the next (see :mod:`pendulum_lab.integrators`).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import os
 import re
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numba
 import numpy as np
 
-from ..codegen.cache import load_generated
+from ..codegen.cache import file_lock, load_generated
 from ..codegen.kernels import import_name
 from ..codegen.lowlevel import keep_alive, span, unmanaged
 from ..integrators import (
@@ -204,9 +206,9 @@ def loop_source(method: Method, first, second, n: int) -> str:
 def _load(method: Method, step: Step, first, second, n: int):
     stem = first.py_func.__module__.removeprefix("pendulum_lab_kernels_")
     stem = f"{stem}_{re.sub(r'[^A-Za-z0-9_]', '_', method.name)}"
-    module, _ = load_generated(stem, loop_source(method, first, second, n),
-                               inject={"step": step.compiled})
-    return module.run
+    module, path = load_generated(stem, loop_source(method, first, second, n),
+                                  inject={"step": step.compiled})
+    return module.run, path.with_suffix(".lock")
 
 
 @dataclass(frozen=True)
@@ -223,6 +225,18 @@ class CompiledMethod:
     field: HamiltonianField
     n: int
     run: object = field(repr=False)
+    #: The lock file of the loop's module: the loop compiles (or loads from disk) on its first
+    #: call with new argument types, under this lock (see :mod:`pendulum_lab.codegen.cache`).
+    lock: Path | None = field(default=None, repr=False)
+
+    def _call(self, *args) -> None:
+        """``run(*args)``, compiling it first, under :attr:`lock`, for argument types it has
+        not seen (one process compiles and saves to disk while another waits, then loads)."""
+        types = tuple(map(numba.typeof, args))
+        if types not in self.run.overloads:
+            with file_lock(self.lock) if self.lock is not None else contextlib.nullcontext():
+                self.run.compile(types)
+        self.run(*args)
 
     def new_memory(self, members: int) -> np.ndarray:
         """Zeroed loop memory for ``members`` trajectories: a fresh start.
@@ -247,7 +261,7 @@ class CompiledMethod:
         per_member = params.shape[0] > 1
 
         def advance(rows):
-            self.run(self.field.separable, rates[rows] if per_member else rates, q[rows],
+            self._call(self.field.separable, rates[rows] if per_member else rates, q[rows],
                      p[rows], float(t0), float(h), n_steps, first_step, save_every,
                      params[rows] if per_member else params, saved_q[rows], saved_p[rows],
                      stats[rows], memory[rows])
@@ -283,7 +297,8 @@ def compile_method(method: Method, field: HamiltonianField, n: int) -> CompiledM
     (:func:`~pendulum_lab.integrators.unsuitability`).
     """
     first, second = step_kernels(method, field)
-    return CompiledMethod(method, field, n, _load(method, method.kernel, first, second, n))
+    run, lock = _load(method, method.kernel, first, second, n)
+    return CompiledMethod(method, field, n, run, lock)
 
 
 @functools.cache
