@@ -4,6 +4,8 @@
 #               suite once more with the oldest supported versions (make test-floors)
 # and the course website:
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
+# and the instructor's kit:
+#   make assignments   build every graded assignment into dist/assignments/<name>/
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -14,12 +16,12 @@ FLOORS_BIN := $(FLOORS_VENV)/bin
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
-.PHONY: lab test test-floors check lint bench docs mathjax clean
+.PHONY: lab test test-floors check lint bench docs mathjax assignments clean
 
 $(BIN)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e ".[lab,test,docs,bench]"
+	$(BIN)/python -m pip install -e ".[lab,test,docs,bench,assignments]"
 	touch $@
 
 # The floors pinned, the test tools at their newest (the lab extra: the command line's tests).
@@ -46,6 +48,10 @@ mathjax: $(MATHJAX)
 docs: $(BIN)/.installed $(MATHJAX)
 	$(BIN)/python tools/build_site.py
 
+# otter assign on every master notebook of assignments/, then its solutions graded (offline).
+assignments: $(BIN)/.installed
+	$(BIN)/python tools/assignments.py build
+
 lab: $(BIN)/.installed
 	$(BIN)/pendulum-lab
 
@@ -60,10 +66,11 @@ test-floors: $(FLOORS_BIN)/.installed
 	$(FLOORS_BIN)/python tools/run_tests.py --floors-only
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
-# the notebooks, the browser, the website or Binder (docs/testing.md).
+# the notebooks, the browser, the website, Binder or the graded assignments (docs/testing.md).
 check: $(BIN)/.installed
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder
+	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder \
+		--ignore=tests/assignments
 
 bench: $(BIN)/.installed
 	$(BIN)/python benchmarks/run.py

@@ -45,7 +45,7 @@ THETA0 = (2.0, 2.5)
 class Config:
     """Sizes and repetitions of one benchmark run.
 
-    ``FULL`` is the configuration of the issue's targets; ``QUICK`` a short
+    ``FULL`` is the configuration the targets are stated for; ``QUICK`` a short
     run of the same code (minutes -> seconds; figures indicative only);
     ``SMOKE`` the tiny one the test suite uses to check the machinery.
     """
@@ -90,7 +90,7 @@ class Config:
     per_eval_steps: int = 50000  # item 10: steps of the long run (the short one: a tenth)
     per_eval_repeats: int = 3
     per_eval_rounds: int = 3
-    per_eval_before: bool = True  # also measure the package before issue 17 (git archive)
+    per_eval_before: bool = True  # also measure the package at item_per_eval.BEFORE (git archive)
     floor_dt: float = 0.002  # item 10: energy floor of glrk8 (truncation far below round-off)
     floor_t_end: float = 1000.0
     peer_t_end: float = 1000.0  # item 11 (heyoka)

@@ -1,8 +1,8 @@
-"""Item 7: a bifurcation diagram of the damped, driven pendulum, against the C RK4 loop.
+"""Item 8: a bifurcation diagram of the damped, driven pendulum, against the C RK4 loop.
 
 ``chaos.bifurcation_diagram`` over the drive amplitude runs every value as one
 member of a single ensemble (a model family, one parameter row per member).
-The issue's target: 600 values x 300 drive periods after a 300-period
+The target: 600 values x 300 drive periods after a 300-period
 transient at 100 steps per period in under 30 s on 2 cores. The C yardstick is
 the same RK4 on the same equations (``c_yardstick.build(pl.driven_pendulum())``),
 timed on a slice of the members in the same run; the ratio is CPU time per
@@ -21,7 +21,7 @@ from harness import Config, Row, Sample, Section, fmt_time, interleave, med, med
 import pendulum_lab as pl
 from pendulum_lab import chaos
 
-#: The issue's target for the full configuration [s, on 2 cores].
+#: The target for the full configuration [s, on 2 cores].
 TARGET_SECONDS = 30.0
 AMPLITUDES = (0.9, 1.5)
 

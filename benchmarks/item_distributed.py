@@ -1,6 +1,6 @@
 """Item 14: a flip-time map on a Dask ``LocalCluster`` against the same map in this process.
 
-The map of issue 17 (1000 x 1000 cells to t = 10 in the full configuration)
+The map (1000 x 1000 cells to t = 10 in the full configuration)
 runs once in this process and twice on a local cluster of worker processes
 (``pendulum_lab.driver.cluster``: the cells cut into chunks, the same function and
 kernels on every worker): with the environment Dask gives its workers, and

@@ -1,4 +1,4 @@
-"""Item 7: the browser-drawn live simulator (issue 16), three ratios measured side by side.
+"""Item 9: the browser-drawn live simulator, three ratios measured side by side.
 
 1. **Kernel time per update.** ``LiveSimulator.update()`` (2000 steps of glrk4, the run
    encoded as float32 buffers and sent through a real ipykernel comm) against the recompute
@@ -30,7 +30,7 @@ BROWSER = HERE.parent / "tests" / "browser"
 DEMO = BROWSER / "live_demo"
 #: States of the demo's 60 s run at 10 ms: the widget has all of it.
 DEMO_STATES = 6001
-#: The issue's target: 55 frames drawn per second on a 60 Hz display.
+#: The target: 55 frames drawn per second on a 60 Hz display.
 FRAME_SHARE = 55 / 60
 
 # Runs inside a fresh ipykernel: the comm there serialises and sends every message as a

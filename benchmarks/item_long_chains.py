@@ -1,10 +1,10 @@
-"""Item 10: long chains (issue 17): first use for n = 10, 20, 50 and the cost per step against n.
+"""Item 13: long chains: first use for n = 10, 20, 50 and the cost per step against n.
 
 Three measurements, each side by side in this run:
 
 * first use in a fresh process (import, ``pl.n_pendulum(n)``, a 1 s ``glrk4``
-  run; warm compiler cache), for the chains of the issue against the double
-  pendulum's, with the issue's targets (n = 20 under 5 s, n = 50 under 30 s);
+  run; warm compiler cache), for the long chains against the double
+  pendulum's, with their targets (n = 20 under 5 s, n = 50 under 30 s);
 * one evaluation of Hamilton's equations, the kernels that loop over the
   links (every chain longer than two links) against the kernels printed from
   the expanded expressions, for three to five links;
@@ -32,7 +32,7 @@ FIRST_USE = (
     "import numpy as np; import pendulum_lab as pl; m = pl.n_pendulum({n}); "
     "pl.simulate(m, np.full({n}, 0.5), np.zeros({n}), t_end=1.0, dt=0.01, method='glrk4')"
 )
-#: The issue's targets for first use [s]; the other sizes are reported for information.
+#: The targets for first use [s]; the other sizes are reported for information.
 FIRST_USE_TARGETS = {20: 5.0, 50: 30.0}
 
 
@@ -68,7 +68,7 @@ def bench_long_chains(cfg: Config) -> Section:
         target = FIRST_USE_TARGETS.get(n)
         rows.append(Row("13", f"first use, n_pendulum({n}) + 1 s glrk4, fresh process",
                         fmt_time(seconds), f"n = 2: {fmt_time(base)}", f"{seconds / base:.2f}x",
-                        f"< {target:g} s (issue 17)" if target else "(info)",
+                        f"< {target:g} s" if target else "(info)",
                         verdict(seconds, target) if target else "info"))
     details.append(f"First use: fresh `python -c \"{FIRST_USE.format(n='n')}\"` (warm kernel and "
                    f"Numba caches), wall time seen from outside, median of {cfg.chain_rounds} "
@@ -95,7 +95,8 @@ def bench_long_chains(cfg: Config) -> Section:
     details.append(f"One evaluation: {cfg.chain_evaluations} calls of `hamilton` from a compiled "
                    "loop through a first-class function (as the integrators call it), CPU time "
                    "per call, median of the rounds. 'printed' = the kernels generated from the "
-                   "SymPy expressions (what chains of every length used before issue 17), "
+                   "SymPy expressions (what chains of every length used before the looped "
+                   "kernels), "
                    "'looped' = pendulum_lab.codegen.long_chains (what every chain of three or more "
                    "links uses now).")
 
@@ -133,7 +134,7 @@ def bench_long_chains(cfg: Config) -> Section:
                              f"{cfg.chain_sizes[-1]} links)",
                         f"slope {slope_step:.2f} per step, {slope_eval:.2f} per evaluation",
                         "n^2 (build M) .. n^3 (dense solve)", f"{costs[-1] / costs[0]:.1f}x",
-                        "slope per evaluation <= 2 (issue 17)", verdict(slope_eval, 2.0)))
+                        "slope per evaluation <= 2", verdict(slope_eval, 2.0)))
         details.append(f"{method}, dt = {dt:g}, CPU time per step (median of {cfg.chain_rounds}"
                        f"): {table}; field evaluations per step: "
                        + ", ".join(f"{e:.1f}" for e in evaluations)

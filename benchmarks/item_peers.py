@@ -1,4 +1,4 @@
-"""Items 11 and 12: the strongest peers of issue 17, heyoka and pyhamsys, side by side.
+"""Items 11 and 12: the strongest peers for long accurate runs, heyoka and pyhamsys, side by side.
 
 Item 11, long accurate runs against heyoka: for each energy requirement
 (``cfg.peer_requirements``) at ``T = cfg.peer_t_end``, heyoka's loosest

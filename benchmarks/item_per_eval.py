@@ -1,4 +1,4 @@
-"""Item 10: the cost per field evaluation of every method against C, before and after issue 17.
+"""Item 10: the cost per field evaluation of every method against C, now and at an older commit.
 
 Three contenders per round, interleaved: the C RK4 loop (per evaluation:
 its CPU time over four evaluations a step), :mod:`per_eval_probe` on the
@@ -25,9 +25,9 @@ from harness import HERE, THETA0, Config, Row, Sample, Section, explorer_start, 
 
 import pendulum_lab as pl
 
-#: The last commit before issue 17's work (function-pointer loop, no starting values).
+#: The last commit before the per-(field, method) loops (function-pointer loop, no starting values).
 BEFORE = "122f41b"
-#: The issue's target: a step kernel's time per evaluation within this factor of C's.
+#: The target: a step kernel's time per evaluation within this factor of C's.
 TARGET = 1.5
 
 

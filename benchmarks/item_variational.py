@@ -13,8 +13,8 @@ import numpy as np
 from harness import Config, Row, Section, explorer_start, fmt_time, interleave, med, timed
 
 import pendulum_lab as pl
-from pendulum_lab.symbolic.discrete_mechanics import RULES
 from pendulum_lab.integrators import variational_method
+from pendulum_lab.symbolic.discrete_mechanics import RULES
 
 SOLVERS = ("fixed_point", "newton")
 # A fast state for the convergence scan: |omega| = 7 rad/s.

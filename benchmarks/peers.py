@@ -1,4 +1,4 @@
-"""The optional peers of issue 17: heyoka (Taylor series, LLVM) and pyhamsys (Tao's method).
+"""The optional peers for long accurate runs: heyoka (Taylor series, LLVM), pyhamsys (Tao).
 
 Both come from the ``bench`` extra (``pip install -e ".[bench]"``). Where one
 is not installed, :func:`heyoka_or_reason` / :func:`pyhamsys_or_reason`

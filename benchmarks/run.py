@@ -1,4 +1,4 @@
-"""Run pendulum_lab's benchmark suite (issues 7 and 16) and write the results table.
+"""Run pendulum_lab's benchmark suite and write the results table.
 
 Usage (from the repository root; ``make bench`` runs the first line)::
 

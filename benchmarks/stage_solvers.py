@@ -25,8 +25,8 @@ import functools
 import numba
 import numpy as np
 
-from pendulum_lab.integrators import MAX_SWEEPS, fixed_point_status
 from pendulum_lab.driver.simulate import hamiltonian_field
+from pendulum_lab.integrators import MAX_SWEEPS, fixed_point_status
 
 SOLVERS = ("fixed point (ours)", "Gauss-Seidel", "simplified Newton")
 

@@ -1,4 +1,4 @@
-"""The benchmark suite (issue 7; items 7-11 from issues 12, 13, 16, 17): ratios side by side.
+"""The benchmark suite, items 1 to 14: ratios side by side.
 
 One file per item (``item_slider.py`` ... ``item_live.py``) and a shared
 harness (``harness.py``: configurations, result rows, interleaved timing, the

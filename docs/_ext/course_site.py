@@ -20,6 +20,8 @@ What it adds to Sphinx + MyST-NB + sphinx-book-theme (see docs/README.md for the
   the cache is emptied and every notebook is read again, so no page shows outputs of older code.
 * **The course map** (directive ``course-map``): the notebooks found in ``notebooks/``, in
   reading order, each with its title and first sentence.
+* **The course plan** (directive ``course-plan``): notebooks with the time to learn and the
+  necessary prerequisites their headers state, and the total time (the instructors' page).
 * **API pages**: one page per public module of the package, found by walking it.
 """
 
@@ -463,6 +465,93 @@ class CourseMap(Directive):
         return row
 
 
+# ------------------------------------------------------------------------------ course plan
+_TIME_TO_LEARN = re.compile(r"\*\*Time to learn:?\*\*:?\s*([^.\n]+)")
+_MINUTES = re.compile(r"(\d+)\s*minutes")
+
+
+def notebook_plan(path: Path) -> tuple[str | None, list[str]]:
+    """A notebook's stated time to learn and its necessary prerequisites (from its header).
+
+    Reads the ``**Time to learn:**`` line and the rows of the ``## Prerequisites`` table whose
+    importance is "Necessary" (concept, with the notes column in brackets when it has one).
+    """
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    time_to_learn, needs = None, []
+    for cell in cells[:6]:
+        if cell["cell_type"] != "markdown":
+            continue
+        text = "".join(cell["source"])
+        match = _TIME_TO_LEARN.search(text)
+        if match and time_to_learn is None:
+            time_to_learn = match.group(1).strip()
+        if "## Prerequisites" not in text:
+            continue
+        for line in text.split("## Prerequisites", 1)[1].splitlines():
+            columns = [column.strip() for column in line.strip().strip("|").split("|")]
+            if line.strip().startswith("|") and len(columns) >= 2 and columns[1] == "Necessary":
+                notes = columns[2] if len(columns) > 2 else ""
+                needs.append(f"{columns[0]} ({notes})" if notes else columns[0])
+    return time_to_learn, needs
+
+
+class CoursePlan(Directive):
+    """Notebooks with their time to learn and necessary prerequisites, read from their headers.
+
+    Option ``notebooks``: the notebooks to list, by the start of their file names
+    (``:notebooks: 00 01 01a``); all of them by default. Under the table, the sum of the times
+    that are stated in minutes. A notebook that states no time to learn is a build warning.
+    """
+
+    has_content = False
+    option_spec = {"notebooks": str}
+
+    def run(self):
+        env = self.state.document.settings.env
+        folder = Path(env.srcdir) / NOTEBOOK_FOLDER
+        paths = sorted(folder.glob("*.ipynb"))
+        if "notebooks" in self.options:
+            wanted = self.options["notebooks"].split()
+            paths = [path for path in paths if path.stem.split("_", 1)[0] in wanted]
+            missing = set(wanted) - {path.stem.split("_", 1)[0] for path in paths}
+            if missing:
+                logger.warning(f"course-plan: no notebook numbered {sorted(missing)}",
+                               location=(env.docname, self.lineno))
+        table = nodes.table(classes=["course-plan"])
+        group = nodes.tgroup(cols=3)
+        table += group
+        for width in (30, 15, 55):
+            group += nodes.colspec(colwidth=width)
+        head = nodes.thead()
+        group += head
+        head += CourseMap._row(nodes.Text("notebook"), nodes.Text("time to learn"),
+                               nodes.Text("needs (necessary prerequisites)"))
+        body = nodes.tbody()
+        group += body
+        minutes = 0
+        for path in paths:
+            env.note_dependency(str(path))
+            title, _ = notebook_summary(path)
+            time_to_learn, needs = notebook_plan(path)
+            if time_to_learn is None:
+                logger.warning(f"course-plan: {path.name} states no time to learn",
+                               location=(env.docname, self.lineno))
+            minutes += sum(int(m) for m in _MINUTES.findall(time_to_learn or ""))
+            link = addnodes.pending_xref(
+                "", nodes.inline("", f"{path.stem.split('_', 1)[0]} {title}"), refdomain="std",
+                reftype="doc", reftarget=f"/{NOTEBOOK_FOLDER}/{path.stem}", refexplicit=True,
+                refwarn=True)
+            needed = nodes.paragraph()
+            parsed, messages = self.state.inline_text("; ".join(needs) or "-", self.lineno)
+            needed += [*parsed, *messages]
+            body += CourseMap._row(nodes.paragraph("", "", link),
+                                   nodes.Text(time_to_learn or "-"), needed)
+        total = nodes.paragraph(
+            "", f"Time to learn, in all: {minutes} minutes ({minutes / 60:.1f} hours) over "
+                f"{len(paths)} notebooks.")
+        return [table, total]
+
+
 def setup(app):
     app.add_config_value("course_repository_url", "", "html", types=(str,))
     app.add_config_value("course_jupyterhub_url", "", "html", types=(str,))
@@ -478,4 +567,5 @@ def setup(app):
     app.connect("doctree-read", fill_alt_text)
     app.connect("build-finished", write_execution_report)
     app.add_directive("course-map", CourseMap)
+    app.add_directive("course-plan", CoursePlan)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

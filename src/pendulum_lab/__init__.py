@@ -63,6 +63,7 @@ _SUBMODULES = {
     "exercises": "exercises",
     "family": "model.pendulum",
     "geometric": "geometric",
+    "henon": "driver.henon",
     "integrators": "integrators",
     "long_chains": "codegen.long_chains",
     "loops": "driver.loops",

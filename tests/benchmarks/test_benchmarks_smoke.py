@@ -1,4 +1,4 @@
-"""Smoke test of the benchmark suite in benchmarks/ (issue 7).
+"""Smoke test of the benchmark suite in benchmarks/.
 
 Every benchmark item runs in the tiny ``SMOKE`` configuration and must return
 well-formed table rows. Nothing here asserts a timing: timings belong to

@@ -150,6 +150,9 @@ def test_spectrum_of_the_damped_pendulum_sums_to_minus_damping_over_m_l2(model):
 
 
 def test_hamiltonian_spectrum_comes_in_pairs():
+    """For one link the pair sum is the total, which the propagators fix (a check of the
+    Jacobian's trace); the pairing of a larger spectrum, which they do not fix, is checked in
+    tests/chaos/test_published_values.py."""
     undamped = pl.driven_pendulum(damping=0.0)
     spectrum = chaos.lyapunov_spectrum(undamped, [0.2], [0.0], t_end=100 * T, dt=T / STEPS,
                                        method="rk4", save_every=STEPS)

@@ -125,23 +125,33 @@ def test_the_package_kernels_key_includes_the_long_chains_module():
     assert with_kernel != without
 
 
-SLOW_SOURCE = "import time\ntime.sleep(0.5)\nVALUE = 42\n"
+# The module announces that it has started running, then takes its time before it is complete.
+SLOW_SOURCE = "STARTED.set()\nimport time\ntime.sleep(0.5)\nVALUE = 42\n"
+
+
+class Started(threading.Event):
+    """An event whose text does not change when it is set (it is part of the module's key)."""
+
+    def __repr__(self):
+        return "Started()"
 
 
 def _first_use_from_two_threads(stem):
-    results, errors = [], []
+    """Two threads load one new module; the second starts once the first is running it."""
+    started, results, errors = Started(), [], []
 
     def use():
         try:
-            module, _ = cache.load_generated(stem, SLOW_SOURCE)
+            module, _ = cache.load_generated(stem, SLOW_SOURCE, inject={"STARTED": started})
             results.append(module.VALUE)
         except Exception as error:  # noqa: BLE001 (collected for the assertion)
             errors.append(error)
 
-    threads = [threading.Thread(target=use) for _ in range(2)]
-    for thread in threads:
-        thread.start()
-    for thread in threads:
+    first, second = threading.Thread(target=use), threading.Thread(target=use)
+    first.start()
+    assert started.wait(timeout=60)
+    second.start()
+    for thread in (first, second):
         thread.join()
     return results, errors
 

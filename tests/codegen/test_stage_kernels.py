@@ -1,65 +1,20 @@
 """The fields' ``stages`` kernels: every stage of an implicit step in one call.
 
 For one or two links the kernel is vectorized and computes sines and cosines
-with :mod:`pendulum_lab.codegen.lane_math` instead of the C library; elsewhere it
+with :mod:`pendulum_lab.codegen.lowlevel`'s instead of the C library's; elsewhere it
 calls ``hamilton`` column by column. Both must give ``hamilton``'s values.
 """
 
-import math
-from fractions import Fraction
-
-import mpmath
-import numba
 import numpy as np
 import pytest
 
 import pendulum_lab as pl
 from pendulum_lab import codegen
-from pendulum_lab.codegen import lane_math as _lane_math
+from pendulum_lab.codegen import lowlevel
 from pendulum_lab.driver.simulate import hamiltonian_field
 from pendulum_lab.integrators.runge_kutta import stage_lanes
 
 RNG = np.random.default_rng(20261130)
-
-
-@numba.njit
-def _worst_ulps(xs):
-    """Largest difference of lane_sincos from math.sin/math.cos, in units of the last place."""
-    worst = 0.0
-    for x in xs:
-        s, c = _lane_math.lane_sincos(x)
-        sine, cosine = math.sin(x), math.cos(x)
-        worst = max(worst, abs(s - sine) / np.spacing(abs(sine)),
-                    abs(c - cosine) / np.spacing(abs(cosine)))
-    return worst
-
-
-def test_lane_sine_and_cosine_agree_with_the_c_library_to_two_units_in_the_last_place():
-    for size in (1.0, 4.0, 1e3, _lane_math.LIMIT):
-        assert _worst_ulps(RNG.uniform(-size, size, 200_000)) <= 2.0
-    # where the reduced argument is tiny (next to multiples of pi/2) the results are tiny
-    # too, and still right to their last places
-    multiples = np.arange(-60_000, 60_000) * (np.pi / 2)
-    assert _worst_ulps(multiples) <= 2.0
-    assert _worst_ulps(np.nextafter(multiples, np.inf)) <= 2.0
-
-
-def test_lane_sine_loses_accuracy_beyond_its_limit():
-    # negative control for the test above and the reason for LIMIT: far out,
-    # the three-part pi/2 no longer reduces exactly
-    assert _worst_ulps(RNG.uniform(1e15, 1e16, 10_000)) > 1e3
-
-
-def test_the_three_parts_of_half_pi_add_up_and_the_first_two_multiply_exactly():
-    with mpmath.workprec(200):
-        total = sum(mpmath.mpf(part) for part in (_lane_math.HALF_PI_1, _lane_math.HALF_PI_2,
-                                                  _lane_math.HALF_PI_3))
-        assert abs(total - mpmath.pi / 2) < mpmath.mpf(10) ** -36
-    for part in (_lane_math.HALF_PI_1, _lane_math.HALF_PI_2):
-        mantissa = Fraction(math.frexp(part)[0])  # in [1/2, 1)
-        assert (mantissa * 2**33).denominator == 1  # 33 significant bits: k * part is exact
-    # negative control: pi/2 itself has more than 33 significant bits
-    assert (Fraction(math.frexp(math.pi / 2)[0]) * 2**33).denominator != 1
 
 
 def _columns(n, lanes, size=3.0):
@@ -114,7 +69,7 @@ def test_angles_beyond_the_lane_functions_range_are_computed_by_the_c_library(na
     n = MODELS[name].n
     ts, y = _columns(n, 8)
     y[0, 3] += 2 * np.pi * 40_000  # about 2.5e5 rad in one column, beyond LIMIT
-    assert abs(y[0, 3]) > _lane_math.LIMIT
+    assert abs(y[0, 3]) > lowlevel.LIMIT
     # every column then comes from hamilton itself, to the last bit
     np.testing.assert_array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
     # negative control: within range, the vectorized functions differ in some last bits
@@ -127,11 +82,11 @@ def test_fewer_columns_than_a_vector_pass_are_computed_by_the_c_library(name):
     # as scalar code the lane functions cost more than the C library (glrk4's two stages)
     field = hamiltonian_field(MODELS[name])
     n = MODELS[name].n
-    for lanes in range(1, _lane_math.LANE_GROUP):
+    for lanes in range(1, lowlevel.LANE_GROUP):
         ts, y = _columns(n, lanes)
         np.testing.assert_array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
     # negative control: whole passes go through the lane functions (some last bits differ)
-    ts, y = _columns(n, 8 * _lane_math.LANE_GROUP)
+    ts, y = _columns(n, 8 * lowlevel.LANE_GROUP)
     assert not np.array_equal(_stages(field, ts, y), _hamilton_by_column(field, ts, y))
 
 

@@ -1,4 +1,4 @@
-"""Bad input to the public functions of issue 12: a clear error naming the argument.
+"""Bad input to the public functions of the geometric layer: a clear error naming the argument.
 
 Each case names the argument (or the model's problem) and what is accepted; the
 last test shows that the same functions accept the valid neighbours of these
@@ -98,6 +98,9 @@ CASES = {
                                       "`iterations`"),
     "transport_threshold, empty": (lambda: sm.transport_threshold(()), TypeError,
                                    "`iterations`"),
+    "crossing_times, K below K_c": (lambda: sm.crossing_times([-0.1]), ValueError, "`excess`"),
+    "crossing_times, odd orbits": (lambda: sm.crossing_times([0.5], orbits=17), ValueError,
+                                   "`orbits`"),
     "step density, frequency": (lambda: ad.step_density(SP, [1.0], [0.0], frequency=-1.0),
                                 ValueError, "`frequency`"),
     "reference_step, shapes": (lambda: dm.reference_step(2, "midpoint", DP.parameter_values,

@@ -51,6 +51,14 @@ def test_finite_time_threshold_decreases_towards_greene():
     assert result.thresholds[-1] < 1.25
 
 
+def test_the_fastest_orbit_threshold_depends_on_the_number_of_orbits():
+    # why the notebook uses the median: with 16 times more orbits the threshold falls
+    ks = np.arange(1.0, 1.6, 0.01)
+    few = sm.transport_threshold((1000,), ks=ks, orbits=4).thresholds[0]
+    many = sm.transport_threshold((1000,), ks=ks, orbits=64).thresholds[0]
+    assert many < few
+
+
 def test_standard_map_bad_input():
     with pytest.raises(ValueError, match="`k`"):
         sm.iterate([0.0], [0.0], -1.0, 3)
@@ -58,6 +66,8 @@ def test_standard_map_bad_input():
         sm.stochasticity_parameter(pl.double_pendulum(), 0.1)
     with pytest.raises(ValueError, match="`h`"):
         sm.to_standard_map(MODEL, [0.0], [0.0], 0.0)
+    with pytest.raises(ValueError, match="`ks`"):
+        sm.first_crossings([-1.0], [0.1], [0.0], 10)
     with pytest.raises(ValueError, match="`ks`"):
         sm.transport_threshold((10,), ks=[1.0])
     with pytest.raises(ValueError, match="`phi0`"):

@@ -1,4 +1,4 @@
-"""Variational integrators as methods of pl.simulate (issue 12, notebook 15).
+"""Variational integrators as methods of pl.simulate (notebook 15).
 
 Each property is checked with a negative control: a method that must fail the
 same check. The coincidences are checked to round-off, and the one that does

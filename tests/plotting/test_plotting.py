@@ -252,11 +252,15 @@ def test_geometric_figures_draw_their_results_into_given_axes():
     from pendulum_lab.geometric import standard_map
 
     fig, axes = plotting.new_figure(1, 3)
-    threshold = standard_map.transport_threshold((10, 100), ks=np.linspace(1.5, 2.5, 5), orbits=4)
-    assert plotting.plot_transport_threshold(threshold, ax=axes[0]) is fig
-    points = axes[0].lines[0]
-    np.testing.assert_array_equal(points.get_xdata(), threshold.iterations)
-    np.testing.assert_array_equal(points.get_ydata(), threshold.thresholds)
+    crossings = standard_map.crossing_times([0.6, 1.0], orbits=16, max_iterations=10**5)
+    assert plotting.plot_crossing_times(crossings, ax=axes[0]) is fig
+    medians, halves = axes[0].lines[0], axes[0].lines[1:3]
+    np.testing.assert_array_equal(medians.get_xdata(), crossings.excess)
+    np.testing.assert_array_equal(medians.get_ydata(), crossings.median)
+    np.testing.assert_array_equal(halves[1].get_ydata(), crossings.half_medians[:, 1])
+    slope_line = axes[0].lines[-1]
+    fitted = np.polyfit(np.log(slope_line.get_xdata()), np.log(slope_line.get_ydata()), 1)[0]
+    assert fitted == pytest.approx(-standard_map.FLUX_EXPONENT)
     scipy = analysis.scipy_run(SP, [1.0], [0.0], t_end=5.0, rtol=1e-6)
     fixed = pl.simulate(SP, [1.0], [0.0], t_end=5.0, dt=0.05, method="leapfrog")
     assert plotting.plot_adaptive_energy([scipy, fixed], ax=axes[1]) is fig
@@ -266,7 +270,74 @@ def test_geometric_figures_draw_their_results_into_given_axes():
     assert plotting.plot_level_sets(SP.hamiltonian_value, (-3, 3), (-8, 8), ax=axes[2]) is fig
     assert axes[2].get_xlabel() == "θ (rad)" and axes[2].get_ylabel() == "p (kg m²/s)"
     with pytest.raises(TypeError, match="`ax`"):
+        plotting.plot_crossing_times(crossings, ax="left")
+
+
+def test_transport_threshold_figure_draws_its_thresholds():
+    from pendulum_lab.geometric import standard_map
+
+    threshold = standard_map.transport_threshold((10, 100), ks=np.linspace(1.5, 2.5, 5), orbits=4)
+    ax = plotting.plot_transport_threshold(threshold).axes[0]
+    np.testing.assert_array_equal(ax.lines[0].get_xdata(), threshold.iterations)
+    np.testing.assert_array_equal(ax.lines[0].get_ydata(), threshold.thresholds)
+    with pytest.raises(TypeError, match="`ax`"):
         plotting.plot_transport_threshold(threshold, ax="left")
+
+
+def test_carried_loops_share_limits_and_show_the_area_ratio():
+    from pendulum_lab.geometric import phase_space
+
+    runs = [phase_space.carried_loop_areas(SP, name, [1.0, 0.0], [[0.3, 0.0], [0.0, 0.6]],
+                                           t_end=2.0, dt=0.1, save_every=10, tol=1e-8)
+            for name in ("explicit_euler", "leapfrog")]
+    fig = plotting.plot_carried_loops(SP, runs, frames=[0, 2], ncols=2)
+    euler, leapfrog = fig.axes[:2]
+    assert euler.get_xlim() == leapfrog.get_xlim() and euler.get_ylim() == leapfrog.get_ylim()
+    assert euler.get_aspect() == 1.0
+    assert f"area ratio {runs[0].ratio[2]:.6f}" in euler.get_title()
+    assert "area ratio 1.000000" in leapfrog.get_title()
+    # negative control: fitted to their own loops, the swollen Euler blob needs other limits
+    own = plotting.plot_carried_loops(SP, runs, frames=[0, 2], ncols=2, shared=False)
+    assert own.axes[0].get_xlim() != own.axes[1].get_xlim()
+    rows = plotting.plot_carried_loops(SP, runs, frames=[0, 2], ncols=1, shared="row")
+    assert rows.axes[0].get_xlim() != rows.axes[1].get_xlim()  # one panel per row
+    with pytest.raises(ValueError, match="`shared`"):
+        plotting.plot_carried_loops(SP, runs, frames=[0, 2], shared="column")
+
+
+def test_projected_areas_split_by_unit_with_legends_outside():
+    from pendulum_lab.geometric import phase_space
+
+    surface = phase_space.carried_loop_areas(
+        DP, "leapfrog", [0.5, 0.8, 0.0, 0.0], 0.1 * np.array([[1.0, 0.5, 0.0, 0.3],
+                                                            [0.2, 0.0, 1.0, 0.8]]),
+        t_end=1.0, dt=0.05, save_every=5, tol=1e-8)
+    fig = plotting.plot_projected_areas(surface)
+    upper, lower = fig.axes
+    assert "J s" in upper.get_ylabel() and "rad²/s" in lower.get_ylabel()
+    np.testing.assert_allclose(upper.lines[-1].get_ydata(), surface.invariant)
+    np.testing.assert_allclose(lower.lines[0].get_ydata(), surface.velocity.sum(axis=1))
+    for ax in (upper, lower):  # anchored right of the panel, clear of every curve
+        assert ax.get_legend().get_bbox_to_anchor().x0 > ax.get_window_extent().x1 - 1
+    assert not plotting.plot_projected_areas(surface, legend=False).axes[0].get_legend()
+
+
+def test_root_branch_figure_marks_the_fold_and_both_roots():
+    from pendulum_lab.geometric import continuation
+
+    uneven = pl.double_pendulum(m1=1.0, m2=1.5, l1=1.0, l2=0.7, g=9.81)
+    theta0 = np.array([0.3, -1.0])
+    branch = continuation.variational_root_branch(
+        uneven, "trapezoid", theta0, uneven.momenta(theta0, np.array([4.0, -6.0])), h_stop=0.25)
+    ax = plotting.plot_root_branch(branch, steps=[0.3]).axes[0]
+    first, second, fold, *marks = ax.lines
+    np.testing.assert_array_equal(first.get_xdata(), branch.h)
+    np.testing.assert_array_equal(second.get_ydata(), branch.q_next[:, 1])
+    assert fold.get_xdata()[0] == branch.fold_h
+    assert [len(mark.get_ydata()) for mark in marks] == [2, 2]  # before and beyond the fold
+    unfolded = continuation.variational_root_branch(pl.simple_pendulum(), "trapezoid", [0.5],
+                                                    [1.0], h_max=0.2)
+    assert len(plotting.plot_root_branch(unfolded).axes[0].lines) == 1  # no fold to mark
 
 
 def test_geometric_panels_use_the_grid_helper():

@@ -1,6 +1,6 @@
 """What things cost on this machine: a chain of ``n`` links, a method's first use.
 
-Timings are measurements of this machine and this session (what is already
+Timings are measurements of this machine and this process (what is already
 compiled or cached), printed by notebooks 00 and 12; the speed targets of the package
 live in ``benchmarks/`` as ratios.
 """
@@ -39,7 +39,7 @@ class ChainCost:
         forcing (:class:`~pendulum_lab.Chain`).
     build : float
         Seconds for :func:`~pendulum_lab.n_pendulum` (prepares the numeric
-        functions the first time ``n`` is used in a session, then reuses them).
+        functions the first time ``n`` is used in a process, then reuses them).
     first_simulation : float
         Seconds of the first :func:`~pendulum_lab.simulate` call after building.
     per_step : float
@@ -85,7 +85,7 @@ def chain_costs(
     Returns
     -------
     list of ChainCost
-        Timings depend on the machine and on what this session already
+        Timings depend on the machine and on what this process already
         compiled; they are measurements, not constants.
     """
     method = get_method(method)
@@ -119,7 +119,7 @@ def chain_costs(
 
 @dataclass(frozen=True)
 class FirstUseCost:
-    """What the first simulation costs on a new machine, and on later sessions.
+    """What the first simulation costs on a new machine, and in later processes.
 
     Attributes
     ----------
@@ -166,7 +166,7 @@ def first_use_cost(n: int = 2, method="glrk4") -> FirstUseCost:
     (``PENDULUM_LAB_CACHE`` for the generated kernel source,
     ``NUMBA_CACHE_DIR`` for Numba's machine code): the first compiles, the
     second loads. Each runs a 1 s simulation of ``n`` links (100 steps) twice.
-    The caches of the running session and of the user are not touched.
+    The caches of the running process and of the user are not touched.
 
     Parameters
     ----------

@@ -30,7 +30,7 @@ __all__ = ["warm_up"]
 
 
 def warm_up(ns=(1, 2), methods=None, progress: bool = True) -> float:
-    """Compile now, or load from the disk cache, the kernels a course session uses.
+    """Compile now, or load from the disk cache, the kernels the course uses.
 
     Calling this ahead of time (``pendulum-lab warmup``; the Binder image does
     it while it is built) spares students the wait.

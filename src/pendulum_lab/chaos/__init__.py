@@ -10,7 +10,11 @@ module:
 * :mod:`.lyapunov`: the largest Lyapunov exponent by two independent methods
   (:func:`lyapunov_benettin`, :func:`lyapunov_variational`), all of them
   (:func:`lyapunov_spectrum`, for damped and driven fields too), and per energy
-  surface (:func:`lyapunov_by_energy`);
+  surface (:func:`lyapunov_by_energy`), each with its running estimate and the
+  agreement of the full run with its first half (``half_run_difference``);
+* :mod:`.tangent`: the variational equations solved along a trajectory
+  (fourth-order Magnus propagators), shared by the exponents and the
+  multipliers;
 * :mod:`.sections`: Poincare sections on energy levels, crossings landed on
   the surface by Newton's method in time or by Henon's trick
   (:func:`section_states`, :func:`section_spread`, :func:`poincare_section`,
@@ -23,7 +27,12 @@ module:
   driven pendulum sampled once per drive period
   (:func:`stroboscopic_section`, :func:`orbit_periods`), against a
   parameter (:func:`bifurcation_diagram`), and which attractor each start
-  ends on (:func:`basins_of_attraction`).
+  ends on (:func:`basins_of_attraction`);
+* :mod:`.floquet`: periodic orbits of the driven pendulum by shooting
+  (:func:`periodic_orbit`, :func:`continue_orbit`), their Floquet
+  multipliers, and the parameter values where they double their period or
+  break their symmetry (:func:`locate_bifurcation`,
+  :func:`period_doubling_cascade`), with stated errors.
 
 Every trajectory comes from :func:`pendulum_lab.simulate` (an ensemble is a
 batch of initial states) or, for runs examined piece by piece, from
@@ -41,6 +50,15 @@ depend on that choice of norm; finite-time estimates do, a little.
 from .basins import Basins, basins_of_attraction
 from .bifurcation import BifurcationDiagram, PeriodDoubling, PeriodWindow, bifurcation_diagram
 from .flips import FlipMap, can_flip, flip_time_map
+from .floquet import (
+    Bifurcation,
+    DoublingCascade,
+    PeriodicOrbit,
+    continue_orbit,
+    locate_bifurcation,
+    period_doubling_cascade,
+    periodic_orbit,
+)
 from .lyapunov import (
     REGULAR_BELOW,
     EnergyExponent,
@@ -68,7 +86,9 @@ from .stroboscopic import StroboscopicSection, orbit_periods, stroboscopic_secti
 
 __all__ = [
     "Basins",
+    "Bifurcation",
     "BifurcationDiagram",
+    "DoublingCascade",
     "EnergyExponent",
     "EnergyLyapunov",
     "LANDINGS",
@@ -79,6 +99,7 @@ __all__ = [
     "LyapunovSpectrum",
     "PeriodDoubling",
     "PeriodWindow",
+    "PeriodicOrbit",
     "PoincareSection",
     "Separation",
     "SmallAngleComparison",
@@ -86,14 +107,18 @@ __all__ = [
     "basins_of_attraction",
     "bifurcation_diagram",
     "can_flip",
+    "continue_orbit",
     "energy_sections",
     "flip_time_map",
     "landing_errors",
+    "locate_bifurcation",
     "lyapunov_benettin",
     "lyapunov_by_energy",
     "lyapunov_spectrum",
     "lyapunov_variational",
     "orbit_periods",
+    "period_doubling_cascade",
+    "periodic_orbit",
     "poincare_section",
     "section_spread",
     "section_states",

@@ -162,6 +162,14 @@ class BifurcationDiagram:
         states): a period doubling splits each point of the orbit in two near
         it, while an attractor of twice the period elsewhere, or a jump to
         another coexisting attractor, lies far away.
+
+        The values bracket what the samples show, not the bifurcation itself:
+        just before a flip the orbit's multiplier is near -1, so a transient
+        of ``N`` periods still alternates with a relative size ``|mu|^N``
+        (critical slowing down; ``0.98^300 = 2e-3``), above the period
+        tolerance, and the orbit looks doubled too early. To locate a flip
+        with a stated error, use
+        :func:`~pendulum_lab.chaos.period_doubling_cascade`.
         """
         max_jump = check.positive_number("max_jump", max_jump)
         found = []

@@ -14,6 +14,18 @@ explores, and that component lies on one energy surface:
 :func:`lyapunov_by_energy` estimates it for orbits spread over each of
 several energy surfaces, and tells the orbits of regular islands apart.
 
+Every estimate says how far it has converged. Besides its running estimate
+(the sum of logarithms divided by the elapsed time, at every record), each
+result holds the estimate after the first half of the run (``half_run``) and
+its distance from the full run's (``half_run_difference``), the agreement of
+two run lengths on one trajectory. On a chaotic orbit the second half moves
+the estimate by about its statistical error: the finite-time exponent
+fluctuates like ``t^(-1/2)`` around its limit, and for two nearly independent
+halves the difference has the spread of the full run's error. On a regular
+orbit the estimate falls like ``ln(c t) / t``, so the first half's estimate is
+about twice the full run's and the difference is as large as the estimate
+itself: no plateau reached.
+
 References
 ----------
 .. [Benettin] G. Benettin, L. Galgani, A. Giorgilli, J.-M. Strelcyn,
@@ -32,9 +44,8 @@ import numpy as np
 
 from .. import validation as check
 from ..driver.cluster import check_client, map_members, members_of, portable_method
-from ..driver.events import hermite
 from ..driver.segments import segment_length, simulate_segments
-from ..driver.simulate import Trajectory, canonical_state, time_grid
+from ..driver.simulate import canonical_state, time_grid
 from ..integrators import get_method
 from ..model import require_double_pendulum, require_model
 from ..model.pendulum import PendulumModel
@@ -42,6 +53,7 @@ from ..plot_dispatch import plot_with
 from .common import phase_distance, require_finite, scalar_or_array, unit_direction
 from .sections import section_spread
 from .separation import perturbed
+from .tangent import magnus_propagators, ordered_product
 
 __all__ = [
     "REGULAR_BELOW",
@@ -50,6 +62,7 @@ __all__ = [
     "LyapunovEstimate",
     "LyapunovSpectrum",
     "benettin_running",
+    "half_run_estimate",
     "lyapunov_benettin",
     "lyapunov_by_energy",
     "lyapunov_spectrum",
@@ -61,6 +74,22 @@ __all__ = [
 #: regular: on a regular orbit the estimate falls like ``ln(c t) / t``
 #: (``ln(100) / 100 = 0.046``), on a chaotic one it settles on a plateau.
 REGULAR_BELOW = 0.1
+
+
+def half_run_estimate(running: np.ndarray) -> np.ndarray:
+    """The running estimate after the first half of the records, ``running[J // 2 - 1]``.
+
+    ``running`` has the records first, shape ``(J, ...)``; NaN where ``J < 2``.
+
+    Examples
+    --------
+    >>> half_run_estimate(np.array([4.0, 3.0, 2.5, 2.0])).tolist()  # after 2 of 4 records
+    3.0
+    """
+    running = np.asarray(running, dtype=float)
+    if len(running) < 2:
+        return np.full(running.shape[1:], np.nan)
+    return running[len(running) // 2 - 1]
 
 
 @dataclass(frozen=True)
@@ -80,6 +109,13 @@ class LyapunovEstimate:
     dt : float
     wall_time : float
         Seconds of computation.
+
+    Notes
+    -----
+    :attr:`half_run` and :attr:`half_run_difference` say whether the
+    estimate has converged (see the module's description): the estimate
+    after the first half of the run, from the same trajectory, and how far
+    the second half moved it.
     """
 
     t: np.ndarray
@@ -93,6 +129,25 @@ class LyapunovEstimate:
     def exponent(self):
         """The estimate at the final time [1/s] (float, or array for an ensemble)."""
         return scalar_or_array(self.running[-1])
+
+    @property
+    def half_time(self) -> float:
+        """The time of :attr:`half_run`, ``t[J // 2 - 1]`` [s] (NaN with one record)."""
+        return float(self.t[len(self.t) // 2 - 1]) if len(self.t) >= 2 else np.nan
+
+    @property
+    def half_run(self):
+        """The estimate after the first half of the run [1/s], as a run of half the length gives."""
+        return scalar_or_array(half_run_estimate(self.running))
+
+    @property
+    def half_run_difference(self):
+        """``|exponent - half_run|`` [1/s]: how far the second half of the run moved the estimate.
+
+        Of the order of the estimate's statistical error on a chaotic orbit;
+        as large as the estimate itself on a regular one (no plateau yet).
+        """
+        return scalar_or_array(np.abs(self.running[-1] - half_run_estimate(self.running)))
 
     def at(self, time: float):
         """The running estimate at the recorded time closest to ``time``."""
@@ -265,50 +320,6 @@ def benettin_running(theta0, p0, rows, model: PendulumModel, dt: float, every: i
     return running
 
 
-def _ordered_product(mats: np.ndarray) -> np.ndarray:
-    """``M[:, r-1] @ ... @ M[:, 1] @ M[:, 0]`` for ``mats`` of shape ``(B, r, ..., k, k)``.
-
-    Pairwise (tree) reduction: ``log2(r)`` vectorised matrix products
-    instead of ``r`` sequential ones. The later factor multiplies from the left.
-    """
-    while mats.shape[1] > 1:
-        if mats.shape[1] % 2:
-            eye = np.broadcast_to(np.eye(mats.shape[-1]), mats[:, :1].shape)
-            mats = np.concatenate([mats, eye], axis=1)
-        mats = mats[:, 1::2] @ mats[:, 0::2]
-    return mats[:, 0]
-
-
-def _magnus_propagators(model, traj: Trajectory, dt: float) -> np.ndarray:
-    """Fourth-order Magnus propagators of ``v' = A(t) v`` for each step of ``traj``.
-
-    ``A`` is the Jacobian of the model's whole vector field (forces
-    included) at the two Gauss points of each step. Returns shape
-    ``(L, ..., 2n, 2n)`` for ``L`` steps; see :func:`lyapunov_variational`
-    and :func:`lyapunov_spectrum`.
-    """
-    n = traj.theta.shape[-1]
-    # A driven field depends on t (shaped to broadcast against the ensemble axes).
-    t = traj.t.reshape(-1, *(1,) * (traj.theta.ndim - 2))
-    at = (lambda tau: ()) if model.is_autonomous else (lambda tau: (tau,))
-    z = np.concatenate([traj.theta, traj.p], axis=-1)
-    slope = dt * np.concatenate(model.vector_field(traj.theta, traj.p, *at(t)), axis=-1)
-    z0, z1, d0, d1 = z[:-1], z[1:], slope[:-1], slope[1:]
-    jacobians = []
-    for s in (0.5 - np.sqrt(3) / 6, 0.5 + np.sqrt(3) / 6):
-        zs = hermite(s, z0, z1, d0, d1)
-        jacobians.append(model.jacobian(zs[..., :n], zs[..., n:], *at(t[:-1] + s * dt)))
-    a1, a2 = jacobians
-    w = (dt / 2) * (a1 + a2) + (np.sqrt(3) * dt**2 / 12) * (a2 @ a1 - a1 @ a2)
-    # exp(W) = exp(tr W / 2n) exp(W0) with W0 = W - (tr W / 2n) I: the scalar
-    # factor exactly, exp(W0) by its (2,2) Pade approximant.
-    shift = np.trace(w, axis1=-2, axis2=-1)[..., None, None] / (2 * n)
-    eye = np.eye(2 * n)
-    w0 = w - shift * eye
-    w2 = (w0 @ w0) / 12
-    return np.exp(shift) * np.linalg.solve(eye - w0 / 2 + w2, eye + w0 / 2 + w2)
-
-
 def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every, t0, progress,
                     directions, label, client, chunk_size):
     """Carry the tangent vectors ``directions`` (shape ``(2n, k)``) along one run.
@@ -369,9 +380,9 @@ def tangent_running(theta0, p0, rows, model: PendulumModel, dt: float, every: in
     recorded = 0
     for segment in run:
         require_finite(segment, f"lyapunov ({label})")
-        step_maps = _magnus_propagators(run.model, segment, dt)
+        step_maps = magnus_propagators(run.model, segment, dt)
         steps = len(segment.t) - 1
-        props = _ordered_product(step_maps.reshape(steps // every, every, *step_maps.shape[1:]))
+        props = ordered_product(step_maps.reshape(steps // every, every, *step_maps.shape[1:]))
         for prop in props:
             basis, r = np.linalg.qr(prop @ basis)
             log_sum += np.log(np.abs(np.diagonal(r, axis1=-2, axis2=-1)))
@@ -517,6 +528,24 @@ class LyapunovSpectrum:
         return scalar_or_array(self.running[-1, ..., 0])
 
     @property
+    def half_time(self) -> float:
+        """The time of :attr:`half_run`, ``t[J // 2 - 1]`` [s] (NaN with one record)."""
+        return float(self.t[len(self.t) // 2 - 1]) if len(self.t) >= 2 else np.nan
+
+    @property
+    def half_run(self) -> np.ndarray:
+        """Every exponent after the first half of the run, shape ``(..., 2n)`` [1/s]."""
+        return half_run_estimate(self.running)
+
+    @property
+    def half_run_difference(self) -> np.ndarray:
+        """``|exponents - half_run|``, shape ``(..., 2n)`` [1/s]: the second half's change of each.
+
+        See :class:`LyapunovEstimate` and the module's description for how to read it.
+        """
+        return np.abs(self.running[-1] - half_run_estimate(self.running))
+
+    @property
     def sum(self):
         """Sum of the exponents at the final time: the mean phase-space contraction rate."""
         return scalar_or_array(self.running[-1].sum(axis=-1))
@@ -553,12 +582,18 @@ def lyapunov_spectrum(
 
     The sum of all exponents is the mean rate at which the flow changes
     phase-space volume, the time average of ``tr A`` (Liouville's formula).
-    For a Hamiltonian field it is 0 and the exponents come in pairs
-    ``+-lambda``; for the damped simple pendulum ``tr A = -damping / (m l^2)``
-    at every state, in ``(theta, p)`` as in ``(theta, omega)`` (the change of
-    variables ``p = m l^2 omega`` is constant), and the propagators contract
-    areas by exactly ``exp(-damping dt / (m l^2))`` per step, so the computed
-    sum equals ``-damping / (m l^2)`` to round-off: an exact check.
+    The propagators reproduce it by construction: their determinant is
+    ``exp(tr W)`` exactly (see :func:`~pendulum_lab.chaos.tangent.magnus_propagators`),
+    and ``sum log |R_ii| = log |det|``. So for the damped simple pendulum
+    (``tr A = -damping / (m l^2)`` at every state) the computed sum equals
+    ``-damping / (m l^2)`` to round-off after any run, converged or not, and
+    for a Hamiltonian field it is 0: an identity of the algorithm, which checks
+    the Jacobian's trace and nothing else. What does test the estimates is
+    their convergence (:attr:`LyapunovSpectrum.half_run_difference`) and, for
+    a Hamiltonian field, the pairing of the spectrum: the exponents come in
+    pairs ``lambda_i + lambda_(2n+1-i) = 0`` and two of them vanish (the
+    direction of the flow and the gradient of the energy), a property of the
+    limit that finite runs approach.
 
     Parameters
     ----------
@@ -638,6 +673,12 @@ class EnergyLyapunov:
     t_end, dt : float
     method : str
     wall_time : float
+    half_run : ndarray, shape (K,), optional
+        Benettin's estimate after the first half of the run [1/s] (see
+        :class:`LyapunovEstimate`); None when not recorded.
+    t : ndarray, shape (J,), optional
+    running : ndarray, shape (J, K), optional
+        The running estimates of every orbit at the times ``t`` [1/s].
     """
 
     energies: np.ndarray
@@ -650,6 +691,16 @@ class EnergyLyapunov:
     dt: float
     method: str
     wall_time: float
+    half_run: np.ndarray | None = None
+    t: np.ndarray | None = None
+    running: np.ndarray | None = None
+
+    @property
+    def half_run_difference(self) -> np.ndarray:
+        """``|exponent - half_run|``, shape (K,) [1/s]: two run lengths compared, per orbit."""
+        if self.half_run is None:
+            raise ValueError("this scan holds no half-run estimates (built without `half_run`)")
+        return np.abs(self.exponent - self.half_run)
 
     @property
     def regular(self) -> np.ndarray:
@@ -740,4 +791,5 @@ def lyapunov_by_energy(
                                  seed=seed, progress=progress)
     return EnergyLyapunov(energies, energy, theta0, omega0, np.asarray(estimate.exponent),
                           threshold, float(estimate.t[-1]), estimate.dt, estimate.method,
-                          estimate.wall_time)
+                          estimate.wall_time, np.asarray(estimate.half_run), estimate.t,
+                          estimate.running)

@@ -4,8 +4,8 @@
 and ``stages`` (and the discrete Legendre transforms of the variational methods); ``cache``
 writes generated code into the kernel cache under a key of all the code it depends on;
 ``long_chains`` evaluates chains of any length link by link instead; ``signatures`` fixes the
-calling convention of every kernel; ``lane_math`` holds the sines and cosines the vectorized
-``stages`` kernel uses; ``lowlevel`` is the one module that reaches below ordinary Numba code.
+calling convention of every kernel; ``lowlevel`` is the one module that reaches below ordinary
+Numba code (with the sines and cosines the vectorized ``stages`` kernel uses).
 """
 
 from .cache import cache_dir, code_key, load_generated
@@ -22,6 +22,7 @@ from .kernels import (
     solve_spd,
     stage_kernel,
 )
+from .lowlevel import sincos
 
 __all__ = [
     "UNROLLED_MAX_LINKS",
@@ -36,6 +37,7 @@ __all__ = [
     "looped_kernels",
     "paired_trig",
     "parameters_array",
+    "sincos",
     "solve_spd",
     "stage_kernel",
 ]

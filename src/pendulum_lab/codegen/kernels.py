@@ -15,7 +15,7 @@ generated from the symbolic equations of :mod:`pendulum_lab.symbolic.mechanics`:
     ``hamilton`` at the columns of ``y = (q, p)`` (an implicit Runge-Kutta
     step's stages, see :mod:`pendulum_lab.codegen.signatures`). For one or two links
     it is ``hamilton``'s lines in one loop over the columns, with the sines
-    and cosines of :mod:`pendulum_lab.codegen.lane_math`, so that the compiler
+    and cosines of :mod:`pendulum_lab.codegen.lowlevel`, so that the compiler
     evaluates 8 columns per pass with SIMD instructions; an angle beyond
     those functions' range sends the call to the C library's, column by
     column. Longer chains, and fields made elsewhere
@@ -52,7 +52,7 @@ from numba import types
 from ..symbolic.discrete_mechanics import DiscreteLagrangian, discrete_lagrangian
 from ..symbolic.mechanics import Chain, derive_chain
 from .cache import load_generated
-from .lane_math import LANE_GROUP
+from .lowlevel import LANE_GROUP
 from .signatures import VECTOR
 
 __all__ = [
@@ -241,8 +241,15 @@ import numba
 import numpy as np
 
 from pendulum_lab.codegen.kernels import solve_spd
-from pendulum_lab.codegen.lane_math import LIMIT, lane_cos, lane_sin, lane_sincos
-from pendulum_lab.codegen.lowlevel import align_stack, inline_into_callers, sincos
+from pendulum_lab.codegen.lowlevel import (
+    LIMIT,
+    align_stack,
+    inline_into_callers,
+    lane_cos,
+    lane_sin,
+    lane_sincos,
+    sincos,
+)
 from pendulum_lab.codegen.signatures import ACCELERATION, HAMILTON, STAGES
 
 #: Coordinates of the state (``q`` and ``p`` each have this many).
@@ -295,7 +302,7 @@ def _column_rewrites(n: int) -> list:
     return [(re.compile(r"\b(q|p|dq|dp)\[(\d+)\]"), subscript)]
 
 
-#: The lane functions in place of the C library's (:mod:`pendulum_lab.codegen.lane_math`).
+#: The lane functions in place of the C library's (:mod:`pendulum_lab.codegen.lowlevel`).
 _LANE_TRIG = [
     (re.compile(r"\bsincos\("), "lane_sincos("),
     (re.compile(r"\bmath\.sin\("), "lane_sin("),
@@ -314,11 +321,12 @@ def _lane_source(parameters: list[str], unpack: list[str], hamilton: list[str],
     """The vectorized ``stages`` kernel: ``hamilton``'s lines in a loop over the columns.
 
     The loop is written twice from the same lines: with the lane functions
-    (:mod:`pendulum_lab.codegen.lane_math`), which the compiler vectorizes, and with
+    (:mod:`pendulum_lab.codegen.lowlevel`), which the compiler vectorizes, and with
     the C library's sines and cosines, for what the lane loop does not serve.
     That is fewer columns than one vector pass (``LANE_GROUP``): as scalar
     code the lane functions always reduce and evaluate both series, which
-    made ``glrk4``'s two stages 14-17 % slower than the C library. And it is
+    costs more than the C library's sines for small arguments
+    (docs/design/stage-kernel.md). And it is
     a column where an argument of a sine or cosine exceeds the lane
     functions' range (``LIMIT``): then all columns are evaluated again, since
     a branch per column inside the loop would stop the vectorization. The
@@ -333,7 +341,7 @@ def _lane_source(parameters: list[str], unpack: list[str], hamilton: list[str],
 
 @numba.njit(STAGES, cache=True, error_model="numpy")
 def stages(ts, y, params, dy, work):
-    """hamilton at every column of y, {LANE_GROUP} columns per pass (codegen.lane_math)."""
+    """hamilton at every column of y, {LANE_GROUP} columns per pass (codegen.lowlevel)."""
     align_stack()
     inline_into_callers()
 {_indent(parameters)}

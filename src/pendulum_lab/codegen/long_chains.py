@@ -1,11 +1,11 @@
 """Long chains: the closed form of a chain's equations, evaluated link by link.
 
 For one or two links, :mod:`pendulum_lab.codegen.kernels` prints the SymPy expressions as
-straight-line Numba kernels and :mod:`pendulum_lab.model.pendulum` lambdifies them. The
+straight-line Numba kernels and :mod:`pendulum_lab.model.numeric` lambdifies them. The
 expressions of ``n`` links hold ``O(n^2)`` terms, so that code, and the time to generate and
-compile it, grows fast: ten links took 13 s before their first step, forty did not finish in
-five minutes. Chains of more than ``UNROLLED_MAX_LINKS`` (:mod:`pendulum_lab.model.pendulum`)
-links are evaluated here instead, from the closed form (:mod:`pendulum_lab.symbolic.mechanics`):
+compile it, grows fast with ``n`` (measured: docs/design/long-chains.md). Chains of more than
+``UNROLLED_MAX_LINKS`` (:mod:`pendulum_lab.codegen.kernels`) links are evaluated here instead,
+from the closed form (:mod:`pendulum_lab.symbolic.mechanics`):
 with the tail masses ``mu_i = m_i + ... + m_n``, ``s_i = sin(theta_i)``, ``c_i = cos(theta_i)``,
 
 ``M_ij = mu_max(i,j) l_i l_j cos(theta_i - theta_j)``,

@@ -15,13 +15,23 @@ minor version for this reason):
   vectorizes (glrk16's stage sums took half the time).
 * **Bit casts** (:func:`float_bits`, :func:`bits_float`): the stopping rule takes maxima of
   non-negative floats as integers, which LLVM vectorizes and a floating-point maximum it would
-  not (3 times as fast on 32 components).
+  not (105 against 51 ns on 32 components, the rule deciding the same).
 * **One ``sincos`` call** (:func:`sincos`): the sine and cosine of one angle from one call of
   the C library, sharing the argument reduction as a C compiler would.
+* **Sines and cosines the compiler can vectorize** (:func:`lane_sin`, :func:`lane_cos`,
+  :func:`lane_sincos`): the stage kernel of one or two links evaluates the field at 8 stages in
+  one SIMD loop, which a call of the C library's ``sin`` would stop (LLVM cannot vectorize an
+  opaque call, and the llvmlite wheels on PyPI are built without Intel's SVML patch, so Numba
+  cannot vectorize ``math.sin`` even with the ``intel-cmplr-lib-rt`` runtime installed). With
+  the C library's sines in the same loop, glrk16 and glrk12 runs of the double pendulum took
+  2.0 to 2.2 times as long (1000 s from (2, 2.5)), which would lose the comparison with heyoka;
+  so they stay, tested to two units in the last place (``tests/codegen/test_lowlevel.py``).
 * **LLVM function attributes** (:func:`align_stack`, :func:`inline_into_callers`): a 64-byte
   aligned stack frame for the vectorized kernels (in some processes their 512-bit spills were
   split over cache lines: 100 against 160-170 ns per field evaluation), and inlining across
-  compiled modules for functions called once per sweep (a glrk16 step 1.47 instead of 1.63 us).
+  compiled modules for functions called once per sweep (a glrk16 step 1.47 instead of 1.63 us
+  with the stopping rule inlined, its run over 1000 s 37 instead of 43 ms with the ``stages``
+  kernel inlined).
 
 Tests check what each device does (results, bits, aliasing), never the machine code.
 """
@@ -30,6 +40,7 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import math
 
 import llvmlite.ir as llvm_ir
 import numba
@@ -38,12 +49,17 @@ from numba.extending import intrinsic
 
 __all__ = [
     "HAVE_SINCOS",
+    "LANE_GROUP",
+    "LIMIT",
     "align_stack",
     "bits_float",
     "block",
     "float_bits",
     "inline_into_callers",
     "keep_alive",
+    "lane_cos",
+    "lane_sin",
+    "lane_sincos",
     "sincos",
     "span",
     "stack_floats",
@@ -61,11 +77,11 @@ def align_stack(typingctx):
     stack. Unless the function asks for an aligned frame before its registers
     are allocated, LLVM can only give the spill slots the 16-byte alignment
     that the calling convention guarantees, and then the speed depends on
-    where the operating system happened to place the stack: the double
-    pendulum's 8-column field took 100 ns in some processes and 160-170 ns
-    in others (each 64-byte spill split over two cache lines). The function's
-    ``alignstack`` attribute makes its prologue realign the stack, so that
-    every process gets the fast placement.
+    where the operating system happened to place the stack (in some
+    processes each 64-byte spill was split over two cache lines; the cost is
+    in the module docstring). The function's ``alignstack`` attribute makes
+    its prologue realign the stack, so that every process gets the fast
+    placement.
     """
 
     def codegen(context, builder, sig, args):
@@ -87,11 +103,10 @@ def inline_into_callers(typingctx):
     arrays, each passed as seven or nine values: the stopping rule
     (``integrators.fixed_point_status``), which LLVM's cost model kept a
     call, and the fields' ``stages`` kernels, which live in another compiled
-    module. Inlined, a ``glrk16`` step took 1.47 instead of 1.63 us (the
-    stopping rule) and its run over 1000 s 37 instead of 43 ms (the
-    ``stages`` kernel), measured. Numba cannot inline the stopping rule's
-    round-off test itself, whose division rules (``error_model``) differ from
-    its callers'; LLVM inlines the compiled function, rules included.
+    module (what inlining them buys is in the module docstring). Numba cannot
+    inline the stopping rule's round-off test itself, whose division rules
+    (``error_model``) differ from its callers'; LLVM inlines the compiled
+    function, rules included.
     """
 
     def codegen(context, builder, sig, args):
@@ -243,3 +258,86 @@ def sincos(typingctx, x):
         return context.make_tuple(builder, sig.return_type, values)
 
     return signature, codegen
+
+
+# ------------------------------------------------------------------------- vectorizable sines
+# How: ``x = k pi/2 + r`` with ``|r| <= pi/4`` (Cody and Waite's reduction, with
+# ``pi/2`` split into three parts whose first two have 33 significant bits, so
+# that ``k`` times them is exact for ``|k| < 2^20``), then the Taylor series of
+# sine and cosine on ``[-pi/4, pi/4]``, kept up to the degree where the next
+# term is below a few hundredths of a unit in the last place, and the quadrant
+# ``k mod 4`` to pick and sign the results. The cosine adds ``1 - r^2/2`` in
+# two parts, so that the rounding of that sum is not lost (as fdlibm's
+# ``__kernel_cos`` does). Both agree with the C library to two units in the
+# last place for ``|x| <= LIMIT`` (``tests/codegen/test_lowlevel.py``); larger
+# arguments lose accuracy, and the stage kernels recompute such stages with
+# the C library.
+#: The stages of an implicit step are evaluated in groups of this many
+#: (unused ones at the step's start): a ``stages`` kernel's loop is vectorized
+#: 8 iterations at a time, whatever the SIMD width (2, 4 or 8 doubles,
+#: interleaved), and a shorter loop stays scalar.
+LANE_GROUP = 8
+
+#: Arguments up to this size are reduced exactly enough (``k < 2^20``, with margin).
+LIMIT = 1.0e5
+
+TWO_OVER_PI = 0.6366197723675814
+# pi/2 = HALF_PI_1 + HALF_PI_2 + HALF_PI_3 to 1e-37; the first two have 33 significant bits.
+HALF_PI_1 = 1.5707963267341256  # 0x1.921fb544p+0
+HALF_PI_2 = 6.077100506303966e-11  # 0x1.0b4611a6p-34
+HALF_PI_3 = 2.0222662487959506e-21  # 0x1.3198a2e037073p-69
+# Adding and subtracting 1.5 * 2^52 rounds a float below 2^51 to an integer (round to even).
+ROUNDING = 6755399441055744.0
+
+# 1/k! for the Taylor series; sine: k = 3, 5, ..., 17; cosine: k = 4, 6, ..., 16.
+_S = tuple((-1.0) ** j / math.factorial(2 * j + 1) for j in range(1, 9))
+_C = tuple((-1.0) ** j / math.factorial(2 * j) for j in range(2, 9))
+S3, S5, S7, S9, S11, S13, S15, S17 = _S
+C4, C6, C8, C10, C12, C14, C16 = _C
+
+
+@numba.njit(inline="always")
+def _reduced(x):
+    """``(r, k)``: ``x = k pi/2 + r``, ``|r| <= pi/4``, ``k`` a whole number (as a float)."""
+    k = (x * TWO_OVER_PI + ROUNDING) - ROUNDING
+    return ((x - k * HALF_PI_1) - k * HALF_PI_2) - k * HALF_PI_3, k
+
+
+@numba.njit(inline="always")
+def _sine_cosine_near_zero(r):
+    """``(sin r, cos r)`` for ``|r| <= pi/4``."""
+    z = r * r
+    sine_tail = S5 + z * (S7 + z * (S9 + z * (S11 + z * (S13 + z * (S15 + z * S17)))))
+    sine = r + r * z * (S3 + z * sine_tail)
+    cosine_tail = z * z * (C4 + z * (C6 + z * (C8 + z * (C10 + z * (C12 + z * (C14 + z * C16))))))
+    half = 0.5 * z
+    w = 1.0 - half
+    cosine = w + (((1.0 - w) - half) + cosine_tail)
+    return sine, cosine
+
+
+@numba.njit(inline="always")
+def lane_sincos(x):
+    """``(sin x, cos x)``, vectorizable (module docstring); accurate for ``|x| <= LIMIT``."""
+    r, k = _reduced(x)
+    s, c = _sine_cosine_near_zero(r)
+    quarter = k * 0.25
+    quadrant = k - 4.0 * math.floor(quarter)  # k mod 4, as 0.0, 1.0, 2.0 or 3.0
+    odd = (quadrant == 1.0) | (quadrant == 3.0)
+    sine = c if odd else s
+    cosine = s if odd else c
+    sine = -sine if quadrant >= 2.0 else sine
+    cosine = -cosine if (quadrant == 1.0) | (quadrant == 2.0) else cosine
+    return sine, cosine
+
+
+@numba.njit(inline="always")
+def lane_sin(x):
+    """``sin x``, vectorizable; accurate for ``|x| <= LIMIT``."""
+    return lane_sincos(x)[0]
+
+
+@numba.njit(inline="always")
+def lane_cos(x):
+    """``cos x``, vectorizable; accurate for ``|x| <= LIMIT``."""
+    return lane_sincos(x)[1]

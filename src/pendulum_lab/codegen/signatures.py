@@ -9,10 +9,10 @@ for the stages of an implicit Runge-Kutta step. Column ``k`` of ``y``
 (shape ``(2 n, lanes)``) is a state ``(q, p)`` at time ``ts[k]``; column
 ``k`` of ``dy`` receives ``(dq, dp)`` there; ``work`` holds ``4 n`` floats of
 scratch. Generated for one or two links as one loop over the columns that
-the compiler vectorizes (:mod:`pendulum_lab.codegen.lane_math`); two 2-d arrays
+the compiler vectorizes (:mod:`pendulum_lab.codegen.lowlevel`); two 2-d arrays
 rather than four, because the vectorized loop first checks at run time
-that no output overlaps an input, pair by pair (four arrays made that check
-as costly as the evaluations, measured).
+that no output overlaps an input, pair by pair, and fewer arrays make fewer
+pairs to check (docs/design/stage-kernel.md).
 
 ``t`` is the time (the drive of a forced pendulum depends on it; other
 fields ignore it) and ``Q`` the generalized forces that no Hamiltonian

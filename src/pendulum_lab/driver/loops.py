@@ -8,7 +8,7 @@ writes a small module into the kernel cache that compiles the loop, the
 step and the field's kernels into one machine-code function, ``run``. Inside
 it every kernel call is a direct call that the compiler can inline, where a
 loop compiled once for all fields would call the kernels through function
-pointers (about 30 ns more per evaluation, measured). Numba keeps ``run`` on
+pointers, slower per evaluation (docs/design/compiled-loop.md). Numba keeps ``run`` on
 disk: it is compiled once per machine, and a change in the field, the
 method or this code gets a new file name, so a stale one is never loaded
 (:mod:`pendulum_lab.codegen.cache`). A run holds the result, a
@@ -81,7 +81,7 @@ def _all_finite(x):
 @numba.njit
 def _copy(out, x):
     """``out[:] = x`` for 1-d arrays, as a plain loop (Numba's slice assignment checks for
-    overlapping memory and may copy: several times slower for a few elements)."""
+    overlapping memory and may copy, which is slower for a few elements)."""
     for i in range(out.size):
         out[i] = x[i]
 
@@ -293,7 +293,7 @@ def compile_method(method: Method, field: HamiltonianField, n: int) -> CompiledM
     """``method`` compiled with the kernels it takes from ``field``, for ``n`` coordinates.
 
     The loop is made on first use (compiled once per machine, then loaded from disk) and
-    kept for the session. The caller has checked that ``method`` can integrate ``field``
+    kept for the life of the process. The caller has checked that ``method`` can integrate ``field``
     (:func:`~pendulum_lab.integrators.unsuitability`).
     """
     first, second = step_kernels(method, field)
@@ -303,5 +303,5 @@ def compile_method(method: Method, field: HamiltonianField, n: int) -> CompiledM
 
 @functools.cache
 def _pool(workers: int) -> ThreadPoolExecutor:
-    """One thread pool for the whole session (starting threads per call costs milliseconds)."""
+    """One thread pool for the whole process (starting threads per call costs milliseconds)."""
     return ThreadPoolExecutor(workers, thread_name_prefix="pendulum_lab")

@@ -4,19 +4,27 @@ Submodules
 ----------
 ``phase_space``
     Areas of blobs of initial states carried by the flow and by the methods,
-    one-step Jacobians, Poincare's integral invariant for chains.
+    one-step Jacobians (and an explicit Runge-Kutta step's area factor in
+    high precision), Poincare's integral invariant for chains, the invariant
+    2-form written in ``(theta, omega)``.
 ``modified_equations``
     The symbolic engine: Taylor expansions of one step, modified vector
     fields, elementary Hamiltonians.
 ``backward_error``
-    :func:`modified_hamiltonian` for the pendulums, its numerical checks,
+    :func:`modified_hamiltonian` for the pendulums, its numerical checks, the
+    attempted Hamiltonian fit of any expanded method's modified equation,
     RK4's energy drift from its modified equation, global error growth.
 ``standard_map``
-    Symplectic Euler on the pendulum as Chirikov's standard map; transport.
+    Symplectic Euler on the pendulum as Chirikov's standard map; the median
+    time of transport across the last invariant circle's remnant.
+``continuation``
+    The root of a variational step's implicit equation followed in the step
+    size, through its fold.
 ``adaptive``
     A naive variable-step leapfrog, the reversible Sundman-transformed
     adaptive leapfrog and the Poincare-transformed midpoint rule (SciPy's
-    adaptive solvers are :func:`pendulum_lab.analysis.scipy_run`).
+    adaptive solvers are :func:`pendulum_lab.analysis.scipy_run`), the step
+    ratio of the time transformation, wandering energy levels.
 
 Their figures are in :mod:`pendulum_lab.plotting` (``plotting.geometric``),
 the variational integrators in the registry of

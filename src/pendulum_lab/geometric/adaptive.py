@@ -22,7 +22,11 @@ Three ways to vary the step, measured by what they do to the energy:
 
 The step-size function here is ``sigma = (1 + |omega|^2 / w^2)^(-1/2)``
 (``w = sqrt(g / l_1)``): steps about ``epsilon`` at rest and ``epsilon w / |omega|``
-when the links spin fast. It is even in ``p``, as reversibility requires.
+when the links spin fast. It is even in ``p``, as reversibility requires. On
+a libration of the simple pendulum ``|omega| <= 2 sqrt(g / l)``, so this ``sigma``
+varies by at most a factor ``sqrt(5)`` along the orbit
+(:func:`libration_step_ratio`): it follows the speed, it does not resolve the
+slow passage near the top of a near-separatrix swing.
 
 References
 ----------
@@ -32,30 +36,41 @@ References
    perturbation theory).
 .. [HS] E. Hairer, G. Soderlind, "Explicit, time reversible, adaptive step
    size control", SIAM J. Sci. Comput. 26 (2005) 1838-1851.
+.. [MT] S. Mikkola, K. Tanikawa, "Explicit symplectic algorithms for
+   time-transformed Hamiltonians", Celest. Mech. Dyn. Astron. 74 (1999)
+   287-295.
+.. [PT] M. Preto, S. Tremaine, "A class of symplectic integrators with
+   adaptive time step for separable Hamiltonian systems", Astron. J. 118
+   (1999) 2532-2541.
 """
 
 from __future__ import annotations
 
 import functools
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import sympy as sp
 
 from .. import validation as check
 from ..analysis import AdaptiveRun, finite_difference_jacobian, symplectic_form_defect
-from ..driver.simulate import step
+from ..driver.simulate import simulate, step
 from ..model.pendulum import PendulumModel
 from ..symbolic.mechanics import derive_chain
-from .model_checks import conservative_model
+from .model_checks import conservative_model, simple_pendulum_model
 
 __all__ = [
+    "LevelSpreads",
+    "level_spreads",
+    "libration_step_ratio",
     "naive_adaptive_leapfrog",
     "poincare_adaptive_midpoint",
     "reversible_adaptive_leapfrog",
     "round_trip_error",
     "state_dependent_step_defect",
     "step_density",
+    "window_means",
 ]
 
 
@@ -156,6 +171,46 @@ def step_density(model: PendulumModel, theta, p, frequency: float | None = None)
     speed2 = np.sum(omega**2, axis=-1)
     return np.stack([1.0 / np.sqrt(1.0 + speed2 / w2), np.sum(omega * alpha, axis=-1) /
                      (w2 + speed2)])
+
+
+def libration_step_ratio(model: PendulumModel, amplitude: float,
+                         frequency: float | None = None) -> float:
+    """Largest over smallest ``sigma`` along a libration of the simple pendulum released at rest.
+
+    On the libration of amplitude ``a`` the speed runs from 0 at the turning
+    points to ``|omega|_max = 2 sqrt(g/l) sin(a/2)`` at the bottom (energy
+    conservation), so with :func:`step_density`'s ``sigma``
+
+    ``sigma(rest) / sigma(bottom) = sqrt(1 + 4 (g / l) sin^2(a/2) / w^2)``.
+
+    The steps of :func:`reversible_adaptive_leapfrog` and
+    :func:`poincare_adaptive_midpoint` follow ``epsilon sigma`` (the first up to
+    the error of integrating ``rho``), so their largest-to-smallest step ratio
+    is close to this number. With ``amplitude = pi`` (the separatrix) it is
+    the supremum over all librations: ``sqrt(5)`` for the default ``w``.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A simple pendulum.
+    amplitude : float
+        ``0 < |amplitude| <= pi`` [rad].
+    frequency : float, optional
+        ``w`` of the step-size function; ``sqrt(g / l)`` by default.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> round(libration_step_ratio(pl.simple_pendulum(), np.pi) ** 2, 12)
+    5.0
+    """
+    model = simple_pendulum_model(model)
+    amplitude = check.real_number("amplitude", amplitude)
+    if not 0 < abs(amplitude) <= np.pi:
+        raise ValueError(f"`amplitude` must be in (0, pi] in size (a libration), got {amplitude}")
+    w0_squared = model.g / model.lengths[0]
+    w2 = w0_squared if frequency is None else check.positive_number("frequency", frequency) ** 2
+    return float(np.sqrt(1.0 + 4.0 * w0_squared * np.sin(amplitude / 2) ** 2 / w2))
 
 
 def _sundman_step(model, theta, p, rho, control, epsilon, frequency):
@@ -325,8 +380,13 @@ def poincare_adaptive_midpoint(model: PendulumModel, theta0, p0, *, t_end: float
     constant steps ``epsilon`` by a symplectic method (the implicit midpoint
     rule here, solved by fixed-point iteration to round-off) gives variable
     steps ``h ~ epsilon sigma`` in ``t`` and a symplectic map, so backward
-    error analysis applies again. ``K`` is not separable: the price is an
-    implicit method and the derivatives of ``sigma``.
+    error analysis applies again. With this ``sigma`` (a function of the
+    momenta and the angles) ``K`` is not separable, so a general symplectic
+    method for it is implicit, and it needs the derivatives of ``sigma``.
+    For a separable ``H = T(p) + U(q)`` and special time transformations
+    (the logarithmic Hamiltonian ``log(T + p_t) - log(-U)`` in an extended phase
+    space, among others) the transformed problem splits into explicit parts
+    and the leapfrog stays explicit [MT, PT].
 
     Parameters
     ----------
@@ -338,7 +398,8 @@ def poincare_adaptive_midpoint(model: PendulumModel, theta0, p0, *, t_end: float
 
     References
     ----------
-    HLW, Sect. VIII.2.1 (Poincare transformation); VI.3 (implicit midpoint rule).
+    HLW, Sect. VIII.2.1 (Poincare transformation); VI.3 (implicit midpoint rule);
+    MT and PT (explicit alternatives for special ``sigma``).
     """
     model, theta, p = _start(model, theta0, p0, links=(1, 2))
     t_end = check.positive_number("t_end", t_end)
@@ -373,3 +434,121 @@ def poincare_adaptive_midpoint(model: PendulumModel, theta0, p0, *, t_end: float
         ps.append(z[n:])
     return _finish(f"Poincare transform + implicit midpoint, epsilon {epsilon:g}", model, times,
                    thetas, ps, calls, start)
+
+
+# --------------------------------------------------------------------------- wandering levels
+def window_means(t, error, width: float, t_end: float | None = None) -> np.ndarray:
+    """Means of ``error`` over consecutive windows ``[a, a + width)`` from 0 to ``t_end``.
+
+    A bounded energy error oscillates about a fixed level, so its window
+    means agree; an error with no conserved quantity to oscillate about
+    wanders, and so do its window means.
+
+    Parameters
+    ----------
+    t, error : array_like, shape (m,)
+        Saved times (increasing, from 0) and the energy error there.
+    width : float
+        Window length [s].
+    t_end : float, optional
+        Only windows that start before ``t_end`` (default: the run's end).
+
+    Returns
+    -------
+    ndarray
+        One mean per window that holds a saved time.
+
+    Examples
+    --------
+    >>> window_means([0.0, 1.0, 2.0, 3.0], [1.0, 3.0, 5.0, 7.0], 2.0).tolist()
+    [2.0, 6.0]
+    """
+    t, error = np.asarray(t, float), np.asarray(error, float)
+    if t.ndim != 1 or t.shape != error.shape or t.size < 2:
+        raise ValueError(f"`t` and `error` must be 1-d of the same length >= 2, got shapes "
+                         f"{t.shape} and {error.shape}")
+    width = check.positive_number("width", width)
+    t_end = t[-1] if t_end is None else check.positive_number("t_end", t_end)
+    starts = np.arange(0.0, t_end - 1e-9 * width, width)
+    means = [error[(t >= a) & (t < a + width)] for a in starts]
+    return np.array([m.mean() for m in means if m.size])
+
+
+@dataclass(frozen=True)
+class LevelSpreads:
+    """How far the window means of the energy error wander, by start and run length.
+
+    Attributes
+    ----------
+    starts : ndarray, shape (s, n)
+        Release angles (at rest).
+    lengths : ndarray, shape (r,)
+        Run lengths [s]: each spread is over the windows of ``[0, length]``
+        of one run of the longest length.
+    width : float
+        Window length [s].
+    epsilon : float
+        The reversible method's step in the fictive time.
+    reversible, fixed : ndarray, shape (s, r)
+        ``max - min`` of the window means of ``E - E0`` [J] for the
+        reversible adaptive leapfrog and for the fixed-step leapfrog with the
+        same mean step over the longest run.
+    steps : ndarray of int, shape (s,)
+        Steps of each reversible run (and of its fixed-step twin).
+    """
+
+    starts: np.ndarray
+    lengths: np.ndarray
+    width: float
+    epsilon: float
+    reversible: np.ndarray
+    fixed: np.ndarray
+    steps: np.ndarray
+
+
+def level_spreads(model: PendulumModel, starts, *, lengths, epsilon: float,
+                  width: float = 20.0) -> LevelSpreads:
+    """Spreads of the window means of the energy error, reversible adaptive against fixed step.
+
+    For each release (at rest) one run of :func:`reversible_adaptive_leapfrog`
+    and one fixed-step leapfrog run with the same number of steps, both of the
+    longest length; the spread of the window means (:func:`window_means`) is
+    measured over the first ``length`` seconds for each ``length``.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    starts : array_like, shape (s, n)
+        Release angles [rad].
+    lengths : sequence of float
+        Increasing run lengths [s], each at least two windows long.
+    epsilon : float
+    width : float
+        Window length [s].
+
+    Returns
+    -------
+    LevelSpreads
+    """
+    model = conservative_model(model)
+    starts = check.state_array("starts", starts, model.n)
+    if starts.ndim != 2:
+        raise ValueError(f"`starts` must have shape (s, {model.n}), got {starts.shape}")
+    lengths = np.asarray([check.positive_number("lengths", x) for x in lengths])
+    width = check.positive_number("width", width)
+    if lengths.size == 0 or np.any(np.diff(lengths) <= 0) or lengths[0] < 2 * width:
+        raise ValueError(f"`lengths` must be increasing, each at least 2 * width = "
+                         f"{2 * width:g} s, got {lengths}")
+    epsilon = check.positive_number("epsilon", epsilon)
+    t_end, rest = float(lengths[-1]), np.zeros(model.n)
+    reversible, fixed, steps = [], [], []
+    for start in starts:
+        run = reversible_adaptive_leapfrog(model, start, rest, t_end=t_end, epsilon=epsilon)
+        twin = simulate(model, start, rest, t_end=t_end, dt=t_end / run.steps, method="leapfrog",
+                        progress=False)
+        steps.append(run.steps)
+        for out, (t, error) in ((reversible, (run.t, run.energy_error)),
+                                (fixed, (twin.t, twin.energy_error))):
+            out.append([np.ptp(window_means(t, error, width, length)) for length in lengths])
+    return LevelSpreads(starts, lengths, width, epsilon, np.array(reversible), np.array(fixed),
+                        np.array(steps))

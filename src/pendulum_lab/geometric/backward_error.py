@@ -9,9 +9,13 @@ separable ``H``). The rest of this module checks the theory with numbers:
 
 * :func:`modified_energy_orders`: along a computed orbit the error of
   ``H~`` truncated after ``h^k`` shrinks like the first omitted power of ``h``;
-* :func:`first_dissipative_term` and :func:`energy_drift`: RK4 has a modified
-  *equation* but no modified Hamiltonian; its first term with non-zero
-  divergence predicts its energy drift rate;
+* :func:`hamiltonian_fit`: the attempt, term by term, to write a method's
+  modified vector field (for a general ``H``) as a Hamiltonian one; it fails
+  for explicit Euler and RK4, and succeeds for the symplectic methods;
+* :func:`first_dissipative_term`, :func:`mean_energy_rate` and
+  :func:`energy_drift`: RK4 has a modified *equation* but no modified
+  Hamiltonian; its first term with non-zero divergence predicts its energy
+  drift rate;
 * the growth of the global error over long times is measured in
   :mod:`pendulum_lab.geometric.long_time`.
 
@@ -39,6 +43,7 @@ from ..symbolic.mechanics import derive_chain, is_identically_zero
 from .long_time import exact_libration
 from .model_checks import conservative_model
 from .modified_equations import (
+    SERIES_METHODS,
     STEP_SIZE,
     abstract_problem,
     hamiltonian_of_field,
@@ -50,12 +55,15 @@ __all__ = [
     "STEP_SIZE",
     "DissipativeTerm",
     "EnergyDrift",
+    "HamiltonianFit",
     "ModifiedEnergy",
     "ModifiedEnergyOrders",
     "energy_drift",
     "first_dissipative_term",
     "generic_modified_hamiltonian",
+    "hamiltonian_fit",
     "hamiltonian_function",
+    "mean_energy_rate",
     "modified_energy",
     "modified_energy_orders",
     "modified_equation",
@@ -81,20 +89,32 @@ def _order(order, maximum: int, what: str) -> int:
 
 
 def _hamiltonian_method(model: PendulumModel, method) -> str:
-    """The canonical method whose modified Hamiltonian ``method`` has, or a clear error."""
+    """The canonical method whose modified Hamiltonian ``method`` has, or a clear error.
+
+    The verdicts come from theory, not from a fit attempted here: explicit
+    Euler and RK4 fail the symplecticity condition of their tableaus
+    (``Method.symplectic``, HLW Thm VI.4.3), and :func:`hamiltonian_fit` shows
+    the first term of their modified equations that no Hamiltonian
+    reproduces. The velocity versions step ``(theta, omega)``; for ``n >= 2``
+    their Jacobian misses ``Psi^T J Psi = J`` in ``(theta, p)`` (notebook 13) and
+    their energy error grows on regular motion, which a map conjugate to a
+    symplectic one would not show (notebook 14).
+    """
     name = get_method(method).name
     if name in VELOCITY_TWINS:
         if model.n == 1:
             return VELOCITY_TWINS[name]
         raise ValueError(
             f"`method` {name!r} has no modified Hamiltonian for n = {model.n}: it steps "
-            "(theta, omega), and for n >= 2 that map is not symplectic in any variables "
-            f"(for n = 1 it equals {VELOCITY_TWINS[name]!r})"
+            "(theta, omega), and for n >= 2 that map is not symplectic in (theta, p) and its "
+            "energy error grows on regular motion, so it is not conjugate to a symplectic map "
+            f"either (for n = 1 it equals {VELOCITY_TWINS[name]!r})"
         )
     if name in ("explicit_euler", "rk4"):
         raise ValueError(
-            f"`method` {name!r} is not symplectic, so it has no modified Hamiltonian: its "
-            "modified equation (see modified_equation) is not a Hamiltonian vector field"
+            f"`method` {name!r} is not symplectic (its tableau fails the symplecticity "
+            "condition), so it has no modified Hamiltonian: hamiltonian_fit shows the first "
+            "term of its modified equation that is not a Hamiltonian vector field"
         )
     if name not in HAMILTONIAN_METHODS:
         raise ValueError(
@@ -105,13 +125,121 @@ def _hamiltonian_method(model: PendulumModel, method) -> str:
 
 
 @functools.cache
+def _abstract_fields(method: str, n: int, separable: bool, order: int) -> tuple:
+    """``f_1, ..., f_{order+1}`` of ``method`` for an undefined ``H`` (or ``T + U``)."""
+    q, p, hamiltonian = abstract_problem(n, separable)
+    series = step_series(method, hamiltonian, q, p, order + 1)
+    return tuple(tuple(f) for f in modified_fields(series, (*q, *p)))
+
+
+@functools.cache
 def _abstract_terms(method: str, n: int, separable: bool, order: int) -> tuple:
     """``(H_0, H_1, ..., H_order)`` for an undefined ``H`` (or ``T + U``)."""
     q, p, hamiltonian = abstract_problem(n, separable)
-    series = step_series(method, hamiltonian, q, p, order + 1)
-    fields = modified_fields(series, (*q, *p))
+    fields = _abstract_fields(method, n, separable, order)
     return (hamiltonian, *(hamiltonian_of_field(fields[j], hamiltonian, q, p, j + 1)
                            for j in range(1, order + 1)))
+
+
+@dataclass(frozen=True)
+class HamiltonianFit:
+    """The attempt to write each term of a modified equation as a Hamiltonian vector field.
+
+    Attributes
+    ----------
+    method : str
+    separable : bool
+        Whether the general Hamiltonian was ``T(p) + U(q)`` rather than ``H(q, p)``.
+    powers : tuple of int
+        The powers ``j`` of ``h`` tried, in order (the attempt stops at the
+        first term that no Hamiltonian fits).
+    outcomes : tuple of str
+        Per power: ``"zero"`` (no term), ``"fitted"`` (a combination of
+        elementary Hamiltonians reproduces it) or ``"no fit"``.
+    hamiltonians : tuple
+        Per power: the fitted ``H_j`` (sympy), ``0`` for a zero term, ``None``
+        where no fit exists.
+    message : str
+        The reason the last attempt failed (empty when every term fitted).
+    """
+
+    method: str
+    separable: bool
+    powers: tuple
+    outcomes: tuple
+    hamiltonians: tuple
+    message: str
+
+    @property
+    def first_failure(self) -> int | None:
+        """The first power of ``h`` whose term no Hamiltonian reproduces (None: all fitted)."""
+        return self.powers[-1] if self.outcomes and self.outcomes[-1] == "no fit" else None
+
+
+def hamiltonian_fit(method: str, max_power: int, *, separable: bool = False) -> HamiltonianFit:
+    """Try to fit a Hamiltonian to each term of ``method``'s modified equation, for a general H.
+
+    One degree of freedom, ``H(q, p)`` an undefined function (or ``T(p) + U(q)``
+    with ``separable``). For each power ``j = 1 .. max_power`` of ``h`` the term
+    ``f_{j+1}`` is matched, coefficient by coefficient, with the Hamiltonian
+    vector fields of all combinations of elementary Hamiltonians with
+    ``j + 1`` factors
+    (:func:`~pendulum_lab.geometric.modified_equations.hamiltonian_of_field`).
+    A symplectic method passes at every power [HLW, Thm IX.3.1]; for any other
+    method some term fails, and the attempt stops there.
+
+    Parameters
+    ----------
+    method : str
+        A method :func:`~pendulum_lab.geometric.modified_equations.step_series`
+        expands: ``explicit_euler``, ``semi_implicit_euler``, ``leapfrog``,
+        ``rk4``, ``glrk4``.
+    max_power : int
+        The highest power of ``h`` tried, ``1 <= max_power <= 4``.
+    separable : bool
+
+    Returns
+    -------
+    HamiltonianFit
+
+    References
+    ----------
+    HLW, Sect. IX.3 (modified equations of symplectic methods are Hamiltonian)
+    and IX.10 (elementary Hamiltonians).
+
+    Examples
+    --------
+    >>> hamiltonian_fit("explicit_euler", 2).first_failure
+    1
+    >>> hamiltonian_fit("semi_implicit_euler", 2).outcomes
+    ('fitted', 'fitted')
+    """
+    if method not in SERIES_METHODS:
+        raise ValueError(f"`method` must be one of {list(SERIES_METHODS)}, got {method!r}")
+    max_power = check.integer_at_least("max_power", max_power, 1)
+    if max_power > 4:
+        raise ValueError(f"`max_power` must be in [1, 4] (the fit at h^5 is costly), "
+                         f"got {max_power}")
+    separable = bool(separable)
+    q, p, hamiltonian = abstract_problem(1, separable)
+    fields = _abstract_fields(method, 1, separable, max_power)
+    powers, outcomes, hamiltonians, message = [], [], [], ""
+    for j in range(1, max_power + 1):
+        powers.append(j)
+        if all(sp.expand(c) == 0 for c in fields[j]):
+            outcomes.append("zero")
+            hamiltonians.append(sp.Integer(0))
+            continue
+        try:
+            hamiltonians.append(hamiltonian_of_field(fields[j], hamiltonian, q, p, j + 1))
+            outcomes.append("fitted")
+        except ValueError as error:
+            outcomes.append("no fit")
+            hamiltonians.append(None)
+            message = str(error)
+            break
+    return HamiltonianFit(method, separable, tuple(powers), tuple(outcomes),
+                          tuple(hamiltonians), message)
 
 
 @functools.cache
@@ -512,6 +640,54 @@ class EnergyDrift:
     t_end: float
 
 
+def mean_energy_rate(model: PendulumModel, method, amplitude: float, power: int) -> float:
+    """The orbit average of ``grad H . f_{power+1}``: what the ``h^power`` term does to the energy.
+
+    Along the modified equation ``y' = f + h f_2 + ...`` the energy changes at
+    the rate ``sum_j h^j grad H . f_{j+1}``; averaged over one period of the
+    exact libration released at rest from ``amplitude`` (512 equally spaced
+    times, the trapezoidal rule of a periodic function), the term ``h^power``
+    contributes ``h^power`` times the number returned [J/s per s^power].
+
+    Parameters
+    ----------
+    model : PendulumModel
+        A simple pendulum.
+    method : str or Method
+        Any method :func:`modified_equation` expands.
+    amplitude : float
+        Release angle at rest, ``0 < |amplitude| < pi`` [rad].
+    power : int
+        ``1 <= power <= 6``.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> rate = mean_energy_rate(pl.simple_pendulum(), "leapfrog", 1.0, 2)
+    >>> bool(abs(rate) < 1e-12)      # a symplectic method's terms do not drain energy
+    True
+    """
+    model = conservative_model(model, (1,))
+    power = _order(power, MAX_FIELD_ORDER - 1, "for the modified equation")
+    if power < 1:
+        raise ValueError("`power` must be >= 1 (power 0 is Hamilton's field, which keeps H)")
+    field = modified_equation(model, method, power)[power]
+    theta, p = model.chain.q[0], model.chain.p[0]
+    rate = sp.diff(model.hamiltonian, theta) * field[0] + sp.diff(model.hamiltonian, p) * field[1]
+    return _libration_mean(model, amplitude, rate)
+
+
+def _libration_mean(model, amplitude, expr) -> float:
+    """The mean of ``expr(theta, p)`` over one period of the exact libration from ``amplitude``."""
+    period = exact_period(model, amplitude)
+    theta, p = exact_libration(model, amplitude, np.arange(512) * period / 512)
+    return float(np.mean(hamiltonian_function(model, expr)(theta, p, 0.0)))
+
+
 def energy_drift(model: PendulumModel, method, amplitude: float, *, dts,
                  t_end: float) -> EnergyDrift:
     """Compare a method's measured energy drift rate with its modified equation's prediction.
@@ -539,11 +715,7 @@ def energy_drift(model: PendulumModel, method, amplitude: float, *, dts,
     if dts.size < 2:
         raise ValueError(f"`dts` must hold at least two step sizes (for the exponent), got "
                          f"{dts.size}")
-    period = exact_period(model, amplitude)
-    times = np.arange(512) * period / 512
-    theta, p = exact_libration(model, amplitude, times)
-    rate = hamiltonian_function(model, term.energy_rate)(theta, p, 0.0)
-    coefficient = float(np.mean(rate))
+    coefficient = _libration_mean(model, amplitude, term.energy_rate)
     measured = []
     for dt in dts:
         run = simulate(model, [amplitude], [0.0], t_end=t_end, dt=dt, method=get_method(method),

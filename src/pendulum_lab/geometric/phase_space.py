@@ -25,18 +25,25 @@ References
    through the methods).
 .. [Arnold] V. I. Arnold, *Mathematical Methods of Classical Mechanics*,
    2nd ed., Springer 1989, Sect. 44 (integral invariants).
+.. [MR] J. E. Marsden, T. S. Ratiu, *Introduction to Mechanics and Symmetry*,
+   2nd ed., Springer 1999, Sect. 7.3 (the Legendre transform pulls the
+   canonical 2-form back to the Lagrangian 2-form on velocity space).
 """
 
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass
+from fractions import Fraction
 
+import mpmath
 import numpy as np
+import sympy as sp
 
 from .. import validation as check
-from ..analysis import step_jacobian, symplectic_form_defect
-from ..driver.simulate import simulate
+from ..analysis import finite_difference_jacobian, step_jacobian, symplectic_form_defect
+from ..driver.simulate import simulate, step
 from ..integrators import get_method
 from ..model import require_model
 from ..model.pendulum import PendulumModel
@@ -47,7 +54,9 @@ __all__ = [
     "ellipse_loop",
     "jacobian_along_orbit",
     "jacobian_properties",
+    "one_step_area_change",
     "polygon_area",
+    "velocity_form_defect",
 ]
 
 
@@ -304,3 +313,190 @@ def jacobian_along_orbit(model: PendulumModel, method, theta0, p0, *, dt: float,
     pairs = [jacobian_properties(model, method, q, p, dt)
              for q, p in zip(run.theta[:steps], run.p[:steps])]
     return np.array([d for d, _ in pairs]), np.array([s for _, s in pairs])
+
+
+# ------------------------------------------------------------------ one step in high precision
+def _exact_coefficient(value: float):
+    """A tableau entry as an exact number: the small rational it rounds, else its binary value.
+
+    Tableaus are stored in double precision; ``1/6`` is not exactly representable.
+    When a fraction with denominator below ``10^6`` rounds to the stored float,
+    that fraction is the coefficient the method means.
+    """
+    fraction = Fraction(value).limit_denominator(10**6)
+    if float(fraction) == value:
+        return mpmath.mpf(fraction.numerator) / fraction.denominator
+    return mpmath.mpf(value)
+
+
+@functools.cache
+def _field_and_jacobian(model: PendulumModel):
+    """Hamilton's field ``(H_p, -H_q)`` and its Jacobian as mpmath functions of ``(q, p)``."""
+    chain = model.chain
+    variables = [*chain.q, *chain.p]
+    hamiltonian = model.hamiltonian.xreplace(model.parameter_values)
+    field = sp.Matrix([hamiltonian.diff(x) for x in chain.p]
+                      + [-hamiltonian.diff(x) for x in chain.q])
+    field_fn = sp.lambdify(variables, list(field), modules="mpmath", cse=True)
+    jacobian_fn = sp.lambdify(variables, field.jacobian(variables).tolist(), modules="mpmath",
+                              cse=True)
+    return field_fn, jacobian_fn
+
+
+def one_step_area_change(model: PendulumModel, method, theta, p, dt: float, *,
+                         digits: int = 40) -> np.ndarray:
+    """``det DPhi_h - 1`` of one step of an explicit Runge-Kutta method, in high precision.
+
+    A small blob around a state has its area (its volume, for several links)
+    multiplied by ``det DPhi_h`` in one step. The Jacobian is propagated
+    through the stages exactly (forward-mode differentiation of
+    ``k_i = f(y + h sum_j a_ij k_j)``) in ``digits``-digit arithmetic, so the
+    result is free of finite-difference and round-off error even where
+    ``det - 1`` is far below ``1e-10``. Tableau entries that are double
+    roundings of small rationals (``1/6``, ``1/3``) are taken as those rationals.
+
+    Parameters
+    ----------
+    model : PendulumModel
+        An unforced chain.
+    method : str or Method
+        A registered method with an explicit Butcher tableau
+        (``"explicit_euler"``, ``"rk4"``).
+    theta, p : array_like, shape (..., n)
+        States in canonical variables.
+    dt : float
+        The step [s].
+    digits : int
+        Decimal digits of the arithmetic, ``>= 16``.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``det DPhi_h - 1`` at each state, rounded to double precision at the end.
+
+    Raises
+    ------
+    ValueError
+        For a method without an explicit tableau (symplectic methods, whose
+        determinant is one, are measured with :func:`jacobian_properties`).
+
+    References
+    ----------
+    HLW, Sect. VI.4 (symplectic Runge-Kutta methods; RK4 is not one) and
+    IV.3 (the stability function ``R``: for the harmonic oscillator
+    ``det = |R(i w h)|^2 = 1 - (w h)^6 / 72 + (w h)^8 / 576`` for RK4).
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> change = one_step_area_change(pl.simple_pendulum(), "explicit_euler", [0.0], [0.0], 0.1)
+    >>> round(float(change), 12)     # h^2 (g/l) cos(theta)
+    0.0981
+    """
+    model = require_model(model)
+    if model.forced:
+        raise ValueError("`model` must be unforced: the area change of a damped or driven "
+                         "step is notebook 17's subject")
+    tableau = get_method(method).tableau
+    if tableau is None or not tableau.explicit:
+        raise ValueError(f"`method` must have an explicit Butcher tableau (explicit_euler, rk4), "
+                         f"got {get_method(method).name!r}")
+    dt = check.real_number("dt", dt)
+    digits = check.integer_at_least("digits", digits, 16)
+    theta = check.state_array("theta", theta, model.n)
+    p = check.state_array("p", p, model.n)
+    check.same_shape("theta", theta, "p", p)
+    field, jacobian = _field_and_jacobian(model)
+    stages, dim = tableau.stages, 2 * model.n
+    states = np.concatenate([theta, p], axis=-1).reshape(-1, dim)
+    out = np.empty(len(states))
+    with mpmath.workdps(digits):
+        a = [[_exact_coefficient(float(x)) for x in row] for row in np.asarray(tableau.a)]
+        b = [_exact_coefficient(float(x)) for x in np.asarray(tableau.b)]
+        h = mpmath.mpf(dt)
+        for index, state in enumerate(states):
+            y = mpmath.matrix([mpmath.mpf(float(x)) for x in state])
+            slopes, tangents = [], []
+            for i in range(stages):
+                point, d_point = y.copy(), mpmath.eye(dim)
+                for j in range(i):
+                    if a[i][j]:
+                        point += h * a[i][j] * slopes[j]
+                        d_point += h * a[i][j] * tangents[j]
+                slopes.append(mpmath.matrix(field(*point)))
+                tangents.append(mpmath.matrix(jacobian(*point)) * d_point)
+            step_jacobian_exact = mpmath.eye(dim)
+            for i in range(stages):
+                step_jacobian_exact += h * b[i] * tangents[i]
+            out[index] = float(mpmath.det(step_jacobian_exact) - 1)
+    return out.reshape(theta.shape[:-1])
+
+
+# ------------------------------------------------------------------ the 2-form in (theta, omega)
+def _canonical_coordinates(model):
+    n = model.n
+    return lambda z: np.concatenate([z[:n], model.momenta(z[:n], z[n:])])
+
+
+def velocity_form_defect(model: PendulumModel, method, theta, omega, dt: float, *,
+                         delta: float = 1e-6) -> float:
+    """How far one step, seen in ``(theta, omega)``, is from keeping the invariant 2-form there.
+
+    The exact flow keeps ``sum_i d theta_i ^ d p_i``. Written in the
+    velocities ``omega = M(theta)^-1 p`` that form is
+    ``sum_ij M_ij d theta_i ^ d omega_j + sum_ijk (dM_ij/d theta_k) omega_j d theta_k ^ d theta_i``,
+    whose matrix is ``Omega(z) = T(z)^T J T(z)`` with ``T`` the Jacobian of
+    ``(theta, omega) -> (theta, M(theta) omega)``: its coefficients depend on
+    the angles. A map ``Psi`` of ``(theta, omega)`` keeps it when
+    ``Psi^T Omega(z1) Psi = Omega(z0)``. For one link ``Omega = m l^2 J``, a
+    constant multiple of the constant form ``J``; for two links it is not
+    constant, and the constant form ``J`` (what
+    :func:`pendulum_lab.analysis.symplecticity_defect` with
+    ``variables="velocity"`` measures) is not kept even by the exact flow.
+
+    Parameters
+    ----------
+    model : PendulumModel
+    method : str or Method
+    theta, omega : array_like, shape (n,)
+        The state the step starts from, in angles and angular velocities.
+    dt : float
+    delta : float
+        Finite-difference increment for both Jacobians.
+
+    Returns
+    -------
+    float
+        ``max |Psi^T Omega(z1) Psi - Omega(z0)|``, with ``Psi``, ``T`` by
+        central differences (accurate to about ``1e-9``).
+
+    References
+    ----------
+    MR, Sect. 7.3; HLW, Sect. VI.2.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> dp = pl.double_pendulum()
+    >>> bool(velocity_form_defect(dp, "glrk8", [1.0, 1.5], [0.3, -0.2], 0.05) < 1e-7)
+    True
+    """
+    model = require_model(model)
+    theta = check.state_vector("theta", theta, model.n)
+    omega = check.state_vector("omega", omega, model.n)
+    dt = check.real_number("dt", dt)
+    n = model.n
+
+    def one_step(z):
+        theta1, p1 = step(model, z[:n], p0=model.momenta(z[:n], z[n:]), dt=dt, method=method)
+        return np.concatenate([theta1, model.velocities(theta1, p1)])
+
+    def form(z):
+        t = finite_difference_jacobian(_canonical_coordinates(model), z, delta)
+        j = np.block([[np.zeros((n, n)), np.eye(n)], [-np.eye(n), np.zeros((n, n))]])
+        return t.T @ j @ t
+
+    z0 = np.concatenate([theta, omega])
+    psi = finite_difference_jacobian(one_step, z0, delta)
+    z1 = one_step(z0)
+    return float(np.max(np.abs(psi.T @ form(z1) @ psi - form(z0))))

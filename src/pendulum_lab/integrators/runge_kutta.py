@@ -20,8 +20,7 @@ import functools
 import numba
 import numpy as np
 
-from ..codegen.lane_math import LANE_GROUP
-from ..codegen.lowlevel import block, span, stack_floats, vector
+from ..codegen.lowlevel import LANE_GROUP, block, span, stack_floats, vector
 from .step import Step, jit_step, kernel_function
 from .stopping import MAX_SWEEPS, fixed_point_status
 from .tableau import ButcherTableau

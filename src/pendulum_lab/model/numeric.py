@@ -132,8 +132,8 @@ def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """Solve ``matrix @ x = rhs`` for a batch of small systems.
 
     ``matrix`` has shape ``(..., n, n)`` and ``rhs`` shape ``(..., n)``. For
-    ``n <= 2`` the closed form is several times faster than
-    ``numpy.linalg.solve`` on tiny matrices; beyond that LAPACK does the work.
+    ``n <= 2`` the closed form, faster than ``numpy.linalg.solve`` on tiny
+    matrices; beyond that LAPACK does the work.
     """
     n = matrix.shape[-1]
     if n == 1:

@@ -18,7 +18,7 @@ and a test can inspect the artists under any backend. By topic:
   and their areas, level sets of modified Hamiltonians, energy drift and error
   growth, the standard map, adaptive steps;
 * :mod:`.driven`: stroboscopic sections, bifurcation diagrams, basins of
-  attraction of the driven pendulum.
+  attraction of the driven pendulum, periodic orbits followed through a parameter.
 """
 
 from .chaos import (
@@ -33,7 +33,7 @@ from .chaos import (
     plot_separation,
     plot_small_angle,
 )
-from .driven import plot_basins, plot_bifurcation, plot_stroboscopic
+from .driven import plot_basins, plot_bifurcation, plot_orbit_branches, plot_stroboscopic
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -54,12 +54,14 @@ from .geometric import (
     plot_adaptive_energy,
     plot_area_ratio,
     plot_carried_loops,
+    plot_crossing_times,
     plot_energy_drift,
     plot_error_growth,
     plot_level_sets,
     plot_modified_energy_orders,
     plot_orbit_on_level_sets,
     plot_projected_areas,
+    plot_root_branch,
     plot_standard_map,
     plot_step_sizes,
     plot_transport_threshold,
@@ -113,6 +115,7 @@ __all__ = [
     "plot_basins",
     "plot_bifurcation",
     "plot_carried_loops",
+    "plot_crossing_times",
     "plot_energy",
     "plot_energy_comparison",
     "plot_energy_decay",
@@ -131,6 +134,7 @@ __all__ = [
     "plot_modified_energy_orders",
     "plot_modified_level_sets",
     "plot_normal_modes",
+    "plot_orbit_branches",
     "plot_orbit_on_level_sets",
     "plot_order",
     "plot_parting",
@@ -138,6 +142,7 @@ __all__ = [
     "plot_phase",
     "plot_phase_portrait",
     "plot_projected_areas",
+    "plot_root_branch",
     "plot_section",
     "plot_sections",
     "plot_separation",

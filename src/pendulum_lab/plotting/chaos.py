@@ -184,7 +184,7 @@ def plot_flip_map(flip_map, ax: Axes | None = None, colorbar: bool = True) -> Fi
 def plot_small_angle(comparison, ax: Axes | None = None, member=()) -> Figure:
     """Both motions of one member of a :class:`~pendulum_lab.chaos.SmallAngleComparison`."""
     ax = get_axes(ax, width=7.0, height=3.6)
-    member = (member,) if np.ndim(member) == 0 and member != () else tuple(member)
+    member = tuple(member) if isinstance(member, tuple | list) else (int(member),)
     full = comparison.theta_full[(slice(None), *member)]
     linear = comparison.theta_linear[(slice(None), *member)]
     for i in range(full.shape[-1]):
@@ -239,7 +239,7 @@ def plot_lyapunov_spectrum(spectrum, ax: Axes | None = None, member=(), **kwargs
     of the exponents (the mean contraction rate of phase-space volume).
     """
     ax = get_axes(ax)
-    member = (member,) if np.ndim(member) == 0 and member != () else tuple(member)
+    member = tuple(member) if isinstance(member, tuple | list) else (int(member),)
     running = spectrum.running[(slice(None), *member)]
     if running.ndim != 2:
         raise ValueError(f"`member` must pick one member of the ensemble shape "

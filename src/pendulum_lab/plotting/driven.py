@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 
 from .figures import get_axes, new_figure, subscript
 
-__all__ = ["plot_basins", "plot_bifurcation", "plot_stroboscopic"]
+__all__ = ["plot_basins", "plot_bifurcation", "plot_orbit_branches", "plot_stroboscopic"]
 
 # Colours of basins (attractor 0, 1, ...); "none settled" is light grey.
 BASIN_COLOURS = ("#9ecae1", "#fdae6b", "#a1d99b", "#bcbddc", "#fdd0a2", "#c7e9c0")
@@ -113,3 +113,60 @@ def plot_basins(basins, ax: Axes | None = None, s: float = 30.0) -> Figure:
     ax.set(xlabel="theta(0) (rad)", ylabel="omega(0) (rad/s)")
     ax.legend(fontsize="small", loc="upper right")
     return ax.figure
+
+
+def plot_orbit_branches(branches: dict, bifurcations=(), axes=None, parameter: str = "A",
+                        link: int = 0) -> Figure:
+    """Periodic orbits followed through a parameter: their mean angle and leading multiplier.
+
+    Parameters
+    ----------
+    branches : dict
+        ``{label: (values, orbits)}``: the parameter's values and the
+        :class:`~pendulum_lab.chaos.PeriodicOrbit` at each (as from
+        :func:`~pendulum_lab.chaos.continue_orbit`).
+    bifurcations : sequence of Bifurcation
+        Marked by a dotted vertical line in both panels, labelled by the multiplier.
+    axes : pair of Axes, optional
+    parameter : str
+        The parameter's symbol on the horizontal axes.
+    link : int
+        Whose mean angle.
+
+    Left: the time average of the angle over each orbit (0 on a symmetric
+    orbit), solid where the orbit is stable and dashed where it is not.
+    Right: the real part of the multiplier of largest modulus, with the
+    lines +1 and -1 where an orbit loses its stability.
+    """
+    if axes is None:
+        fig, axes = new_figure(1, 2, width=11.0, height=3.8)
+    for k, (label, (values, orbits)) in enumerate(branches.items()):
+        values = np.asarray(values, dtype=float)
+        if len(values) != len(orbits):
+            raise ValueError(f"branch {label!r}: {len(values)} values but {len(orbits)} orbits")
+        order = np.argsort(values, kind="stable")  # a branch may be followed both ways
+        values, orbits = values[order], [orbits[i] for i in order]
+        stable = np.array([orbit.stable for orbit in orbits])
+        # each piece runs to the neighbouring point of the other kind, so the line is unbroken
+        solid = stable | np.r_[stable[1:], False]
+        dashed = ~stable | np.r_[~stable[1:], False]
+        mean = np.array([orbit.mean_theta[link] for orbit in orbits])
+        leading = np.array([orbit.multipliers[0].real for orbit in orbits])
+        colour = f"C{k}"
+        for y, ax in ((mean, axes[0]), (leading, axes[1])):
+            ax.plot(values, np.where(solid, y, np.nan), "-", color=colour, label=label)
+            ax.plot(values, np.where(dashed, y, np.nan), "--", color=colour)
+    for bifurcation in bifurcations:
+        for ax in axes:
+            ax.axvline(bifurcation.value, color="0.3", lw=0.8, ls=":")
+        axes[1].annotate(f"μ = {bifurcation.multiplier:+d}", (bifurcation.value, 1.0),
+                         xycoords=("data", "axes fraction"), xytext=(3, -12),
+                         textcoords="offset points", fontsize="x-small")
+    for level in (1.0, -1.0):
+        axes[1].axhline(level, color="0.6", lw=0.8)
+    axes[0].set(xlabel=parameter, ylabel="mean angle over the orbit (rad)")
+    axes[1].set(xlabel=parameter, ylabel="leading Floquet multiplier (real part)")
+    axes[0].legend(fontsize="small")
+    axes[0].set_title("solid: stable, dashed: unstable", fontsize="small")
+    return axes[0].figure
+

@@ -13,19 +13,21 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import NullFormatter
 
-from ..geometric.standard_map import GREENE_K
+from ..geometric.standard_map import FLUX_EXPONENT, GREENE_K
 from .figures import axis_label, get_axes, get_axes_grid, subscript
 
 __all__ = [
     "plot_adaptive_energy",
     "plot_area_ratio",
     "plot_carried_loops",
+    "plot_crossing_times",
     "plot_energy_drift",
     "plot_error_growth",
     "plot_level_sets",
     "plot_modified_energy_orders",
     "plot_orbit_on_level_sets",
     "plot_projected_areas",
+    "plot_root_branch",
     "plot_standard_map",
     "plot_step_sizes",
     "plot_transport_threshold",
@@ -75,10 +77,12 @@ def plot_orbit_on_level_sets(run, functions, axes=None, margin=0.15):
     return fig
 
 
-def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3):
+def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3, shared=True):
     """The loop of initial states and its images at saved times, one panel per method.
 
-    Each panel is scaled to its own loops, with the energy's level sets behind.
+    Every panel has equal scales on its two axes (a blob's shape and area
+    are seen as they are) and the area ratio at the last frame drawn in its
+    title; the energy's level sets are drawn behind.
 
     Parameters
     ----------
@@ -87,20 +91,38 @@ def plot_carried_loops(model, results, frames, axes=None, ncols=3, margin=0.3):
     results : sequence of LoopAreas
     frames : sequence of int
         Indices of saved times to draw.
+    shared : bool or "row"
+        Give every panel the same limits (the union of all loops drawn), so
+        that areas can be compared across panels; ``"row"``: the same limits
+        within each row of ``ncols`` panels; ``False``: each panel fitted to
+        its own loops.
     """
+    if shared not in (True, False, "row"):
+        raise ValueError(f"`shared` must be True, False or 'row', got {shared!r}")
     fig, grid = get_axes_grid(axes, len(results), ncols, height=3.4)
-    for ax, result in zip(grid, results):
-        loops = result.loops[list(frames)]
-        lo, hi = loops.min(axis=(0, 1)), loops.max(axis=(0, 1))
+    frames = list(frames)
+    bounds = [(r.loops[frames].min(axis=(0, 1)), r.loops[frames].max(axis=(0, 1)))
+              for r in results]
+    if shared:
+        size = ncols if shared == "row" else len(results)
+        for first in range(0, len(results), size):
+            group = bounds[first:first + size]
+            union = (np.min([lo for lo, _ in group], axis=0),
+                     np.max([hi for _, hi in group], axis=0))
+            bounds[first:first + size] = [union] * len(group)
+    for ax, result, (lo, hi) in zip(grid, results, bounds):
         pad = margin * (hi - lo)
-        plot_level_sets(model.hamiltonian_value, (lo[0] - pad[0], hi[0] + pad[0]),
-                        (lo[1] - pad[1], hi[1] + pad[1]), ax=ax)
+        lo, hi = lo - pad, hi + pad
+        plot_level_sets(model.hamiltonian_value, (lo[0], hi[0]), (lo[1], hi[1]), ax=ax)
         for k, frame in enumerate(frames):
             closed = np.vstack([result.loops[frame], result.loops[frame][:1]])
             ax.fill(closed[:, 0], closed[:, 1], alpha=0.35, color=f"C{k}",
                     label=f"t = {result.t[frame]:g} s")
             ax.plot(closed[:, 0], closed[:, 1], color=f"C{k}", lw=0.8)
-        ax.set_title(f"{result.method}, h = {result.dt:g}", fontsize=10)
+        ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), aspect="equal")
+        ax.set_title(f"{result.method}, h = {result.dt:g}: area ratio "
+                     f"{result.ratio[frames[-1]]:.6f} at t = {result.t[frames[-1]]:g} s",
+                     fontsize=9)
     for ax in grid[len(results):]:
         ax.set_visible(False)
     grid[0].legend(fontsize=8, loc="best")
@@ -119,19 +141,68 @@ def plot_area_ratio(results, ax=None, labels=None):
     return ax.figure
 
 
-def plot_projected_areas(result, ax=None):
-    """The areas of a loop's projections on each ``(theta_i, p_i)`` plane, their sum, and the
-    sum of the ``(theta_i, omega_i)`` areas, against time."""
-    ax = get_axes(ax)
+def plot_projected_areas(result, axes=None, legend=True):
+    """A loop's projected areas against time, in two panels of different units.
+
+    The upper panel has the oriented areas of the loop's projections on each
+    ``(theta_i, p_i)`` plane and their sum, Poincare's invariant (units J s,
+    as rad kg m^2/s); the lower one the sum of the areas in the
+    ``(theta_i, omega_i)`` planes (rad^2/s), which the exact flow does not keep
+    for two links.
+
+    Parameters
+    ----------
+    result : LoopAreas
+    axes : pair of Axes, optional
+        Upper and lower panel; a new two-row figure by default.
+    legend : bool
+        Draw the legends, outside the panels on the right (so that they hide
+        no part of the curves).
+    """
+    fig, (upper, lower) = get_axes_grid(axes, 2, 1, width=7.0, height=2.6, sharex=True)
     n = result.canonical.shape[1]
     for i in range(n):
         sub = subscript(i + 1)
-        ax.plot(result.t, result.canonical[:, i], ls="--", label=f"(θ{sub}, p{sub}) plane")
-    ax.plot(result.t, result.invariant, color="black", lw=2, label="sum over the planes")
-    ax.plot(result.t, result.velocity.sum(axis=1), color="tab:red", label="sum in (θᵢ, ωᵢ)")
-    ax.set_xlabel(axis_label("t"))
-    ax.set_ylabel("oriented area")
-    ax.set_title(f"{result.method}, h = {result.dt:g}", fontsize=10)
+        upper.plot(result.t, result.canonical[:, i], ls="--", label=f"(θ{sub}, p{sub}) plane")
+    upper.plot(result.t, result.invariant, color="black", lw=2, label="sum over the planes")
+    upper.set_ylabel("area in (θᵢ, pᵢ) (J s)")
+    upper.set_title(f"{result.method}, h = {result.dt:g}", fontsize=10)
+    lower.plot(result.t, result.velocity.sum(axis=1), color="tab:red",
+               label="sum over the (θᵢ, ωᵢ) planes")
+    lower.set_ylabel("area in (θᵢ, ωᵢ) (rad²/s)")
+    lower.set_xlabel(axis_label("t"))
+    if legend:
+        for ax in (upper, lower):
+            ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    return fig
+
+
+def plot_root_branch(branch, ax=None, steps=()):
+    """The roots ``q_{k+1}(h)`` of a variational step along their branch, with its fold.
+
+    Parameters
+    ----------
+    branch : RootBranch
+        From :func:`pendulum_lab.geometric.continuation.variational_root_branch`.
+    steps : sequence of float
+        Steps at which to mark the branch's roots (one before the fold, one
+        beyond it when the branch comes back).
+    """
+    ax = get_axes(ax)
+    n = branch.q_next.shape[1]
+    for i in range(n):
+        sub = subscript(i + 1) if n > 1 else ""
+        ax.plot(branch.h, branch.q_next[:, i], color=f"C{i}", label=f"θ{sub} at step k + 1")
+    if branch.folded:
+        ax.axvline(branch.fold_h, color="black", ls="--", lw=0.8,
+                   label=f"fold, h = {branch.fold_h:.4f} s")
+    for h in steps:
+        roots = branch.roots_at(h)
+        for i in range(n):
+            ax.plot(np.full(len(roots), h), roots[:, i], "o", color=f"C{i}", ms=5)
+    ax.set_xlabel(axis_label("step"))
+    ax.set_ylabel("root θ at step k + 1 (rad)")
+    ax.set_title(f"{branch.rule} rule: the root that continues the small-step one", fontsize=10)
     ax.legend(fontsize=8)
     return ax.figure
 
@@ -205,8 +276,43 @@ def plot_standard_map(portraits, axes=None, ncols=3):
     return fig
 
 
+def plot_crossing_times(result, ax=None):
+    """Median first-crossing time of the standard map against ``K - K_c``, log-log.
+
+    The medians of the whole ensemble (dots) and of its two halves (small
+    marks), the fastest orbit of each half (grey), and a line of
+    MacKay-Meiss-Percival's slope ``-FLUX_EXPONENT`` through the medians.
+    """
+    ax = get_axes(ax)
+    known = np.isfinite(result.median)
+    ax.loglog(result.excess, result.median, "o", color="tab:blue",
+              label=f"median of {result.orbits} orbits (fitted slope {result.slope:.2f})")
+    for half in range(2):  # one legend entry for both halves
+        ax.loglog(result.excess, result.half_medians[:, half], "_", color="tab:blue", ms=10,
+                  label=None if half else "medians of the two halves")
+    for half in range(2):
+        ax.loglog(result.excess, result.half_fastest[:, half], "x", color="0.5",
+                  label=None if half else "fastest orbit of each half")
+    if known.any():
+        x = result.excess[known]
+        centre = np.exp(np.mean(np.log(result.median[known])))
+        anchor = np.exp(np.mean(np.log(x)))
+        ax.loglog(x, centre * (x / anchor) ** -FLUX_EXPONENT, color="black", ls="--",
+                  label=f"slope -{FLUX_EXPONENT:g} (MacKay, Meiss, Percival)")
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xticks(result.excess, [f"{x:.2g}" for x in result.excess])
+    ax.set_xlabel("K - K_c")
+    ax.set_ylabel("iterations to cross 2π in I")
+    ax.legend(fontsize=8)
+    return ax.figure
+
+
 def plot_transport_threshold(result, ax=None):
-    """Finite-time transport threshold against the number of iterations, with Greene's K_c."""
+    """Finite-time transport threshold (the fastest orbit's) against the number of iterations.
+
+    With Greene's K_c for reference. The threshold depends on the number of
+    orbits started; :func:`plot_crossing_times` draws the median instead.
+    """
     ax = get_axes(ax)
     ax.semilogx(result.iterations, result.thresholds, "o-", label="smallest K with crossings")
     ax.axhline(GREENE_K, color="black", ls="--", label=f"Greene's K_c = {GREENE_K:.4f}")

@@ -92,8 +92,8 @@ __all__ = [
 
 #: Chains up to this many links get their entries expanded into the terms the
 #: Lagrangian derivation gives (the forms the course shows, counts and prints
-#: kernels from; under a second for 10 links); expanded, an entry of a longer
-#: chain's forcing would hold about n^2 / 2 terms instead of n.
+#: kernels from; cheap at this size, docs/design/long-chains.md); expanded, an entry
+#: of a longer chain's forcing would hold about n^2 / 2 terms instead of n.
 EXPANDED_MAX_LINKS = 10
 #: Building the symbolic equations shows a progress bar from this many links.
 PROGRESS_LINKS = 30

@@ -1,0 +1,76 @@
+"""Shared by the assignment tests: the grading tool loaded as a module, the session's kit.
+
+``tools/assignments.py`` (the command behind ``make assignments``) is driven as a library. Each
+grading runs a submission in a fresh kernel, so the kit builds every assignment once per session
+and keeps the solutions' gradings for every test that needs them.
+"""
+
+from __future__ import annotations
+
+import copy
+import importlib.util
+import sys
+from pathlib import Path
+
+import nbformat
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+ARTIFACTS = REPO_ROOT / "test-artifacts" / "assignments"
+
+
+def _load_tool():
+    spec = importlib.util.spec_from_file_location("assignment_tool",
+                                                  REPO_ROOT / "tools" / "assignments.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up there
+    spec.loader.exec_module(module)
+    return module
+
+
+tool = _load_tool()
+NAMES = [path.stem for path in tool.masters()]
+
+
+class Kit:
+    """The built assignments of this session and the gradings made so far."""
+
+    def __init__(self, dist: Path, work: Path):
+        self.dist = dist
+        self.work = work
+        self.folders = {name: tool.build(master, dist) for name, master in
+                        zip(NAMES, tool.masters(), strict=True)}
+        self._solutions = {}
+        self.seconds = {}
+
+    def master(self, name: str) -> nbformat.NotebookNode:
+        return nbformat.read(tool.ASSIGNMENTS / f"{name}.ipynb", as_version=4)
+
+    def notebook(self, name: str, version: str) -> nbformat.NotebookNode:
+        """``version``: "student" (handed out) or "autograder" (the solutions)."""
+        return nbformat.read(self.folders[name] / version / f"{name}.ipynb", as_version=4)
+
+    def grade(self, name: str, notebook, label: str, **limits):
+        """Grade ``notebook`` (a NotebookNode, or a path) as a submission of ``name``."""
+        if isinstance(notebook, nbformat.NotebookNode):
+            path = self.work / f"{name}-{label}.ipynb"
+            nbformat.write(notebook, path)
+        else:
+            path = Path(notebook)
+        result = tool.grade(self.folders[name], path, **limits)
+        self.seconds[f"{name} {label}"] = round(result.seconds, 1)
+        return result
+
+    def solutions(self, name: str):
+        if name not in self._solutions:
+            self._solutions[name] = self.grade(
+                name, self.folders[name] / "autograder" / f"{name}.ipynb", "solutions")
+        return self._solutions[name]
+
+
+def replace_cell(notebook, marker: str, source: str):
+    """A copy of ``notebook`` whose one code cell containing ``marker`` now holds ``source``."""
+    changed = copy.deepcopy(notebook)
+    hits = [cell for cell in changed.cells if cell.cell_type == "code" and marker in cell.source]
+    assert len(hits) == 1, f"{len(hits)} code cells contain {marker!r}"
+    hits[0].source = source
+    return changed
