@@ -115,6 +115,7 @@ def test_the_memory_estimate_covers_what_a_run_really_holds(n, method, members, 
 
 def test_memory_is_checked_before_any_start_up_work(monkeypatch):
     monkeypatch.setattr(validation, "available_memory", lambda: 10**6)
+    monkeypatch.setattr(driver, "SMALL_RUN", 0)  # ask about every run
 
     def no_start_up(*args, **kwargs):
         raise AssertionError("the start-up work ran before the memory check")
@@ -139,6 +140,7 @@ def test_the_memory_check_counts_each_methods_working_memory(monkeypatch):
     members, n = 10_000, 2
     needed = {m: driver.memory_needed(n, get_method(m), members, 2) for m in ("rk4", "glrk8")}
     monkeypatch.setattr(validation, "available_memory", lambda: int(sum(needed.values()) / 2))
+    monkeypatch.setattr(driver, "SMALL_RUN", 0)
     theta0 = np.full((members, n), 0.3)
     pl.simulate(DP, theta0, np.zeros_like(theta0), t_end=0.01, dt=0.01, method="rk4")
     with pytest.raises(ValueError, match="needs about"):
@@ -288,3 +290,28 @@ def test_step_count_validates_its_arguments(t_end, dt, error, argument):
 def test_step_count_of_valid_arguments():
     assert pl.step_count(0.0, 0.1) == 0 and pl.step_count(1, 0.25) == 4
     assert pl.step_count(np.float64(0.3), np.float64(0.1)) == 3
+
+
+def _restarted_at_a_huge_angle():
+    theta0 = np.array([[0.1, 0.2], [0.3, 0.4]])
+    run = pl.simulate_segments(DP, theta0, np.zeros_like(theta0), t_end=1.0, dt=0.01,
+                               method="rk4", segment_steps=50)
+    segments = iter(run)
+    next(segments)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the saved angles' rounding
+        run.restart([[1e12, 0.2]], [[0.0, 0.0]], where=[True, False])
+    return next(segments)
+
+
+def test_a_segmented_run_restarted_at_huge_angles_reduces_them_too(monkeypatch):
+    after = _restarted_at_a_huge_angle()
+    assert after.theta[0, 0].tolist() == [1e12, 0.2]
+    fresh = pl.simulate(DP, [reduce_turns(1e12), 0.2], p0=[0.0, 0.0], t_end=0.5, dt=0.01,
+                        method="rk4")
+    assert np.array_equal(after.energy[:, 0], fresh.energy)
+    # negative control: without the reduction the restarted member steps at 1e12 rad, where
+    # floats are 1.2e-4 rad apart, and its energy is not the fresh run's
+    monkeypatch.setattr(driver, "REDUCE_ANGLES_BEYOND", np.inf)
+    unreduced = _restarted_at_a_huge_angle()
+    assert np.max(np.abs(unreduced.energy[:, 0] - fresh.energy)) > 1e-6

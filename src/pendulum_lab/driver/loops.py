@@ -226,16 +226,19 @@ class CompiledMethod:
     n: int
     run: object = field(repr=False)
     #: The lock file of the loop's module: the loop compiles (or loads from disk) on its first
-    #: call with new argument types, under this lock (see :mod:`pendulum_lab.codegen.cache`).
+    #: call, under this lock (see :mod:`pendulum_lab.codegen.cache`).
     lock: Path | None = field(default=None, repr=False)
 
     def _call(self, *args) -> None:
-        """``run(*args)``, compiling it first, under :attr:`lock`, for argument types it has
-        not seen (one process compiles and saves to disk while another waits, then loads)."""
-        types = tuple(map(numba.typeof, args))
-        if types not in self.run.overloads:
+        """``run(*args)``; its first call compiles it (or loads it from disk) under :attr:`lock`,
+        so that one process compiles and saves while another waits, then loads.
+
+        Later calls pass arrays of the same types (finding the types costs tens of
+        microseconds, more than a short call's work), so only the first is looked at.
+        """
+        if not self.run.signatures:
             with file_lock(self.lock) if self.lock is not None else contextlib.nullcontext():
-                self.run.compile(types)
+                self.run.compile(tuple(map(numba.typeof, args)))
         self.run(*args)
 
     def new_memory(self, members: int) -> np.ndarray:

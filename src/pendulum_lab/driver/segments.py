@@ -149,6 +149,7 @@ class SegmentedRun:
         self.batch_shape = theta0.shape[:-1]
         self.model = model.for_ensemble(self.batch_shape)
         self._theta = theta0.reshape(-1, model.n).copy()
+        self._size = self._theta.shape[0]
         # Huge angles step reduced by whole turns; the segments show them continued from
         # the angles given (see AngleReduction).
         self._reduction = AngleReduction.of(self._theta, stacklevel=4)
@@ -247,13 +248,14 @@ class SegmentedRun:
                              f"{p.shape}")
         # Copies: the current state is a view into the last segment handed out.
         self._theta, self._state = self._theta.copy(), self._state.copy()
-        if self._reduction is not None:  # the new angles are given as the segments show them
+        moved = AngleReduction.of(theta)  # the new angles are given as the segments show them
+        if moved is not None or self._reduction is not None:
+            none = np.zeros((self._size, n))
+            current = self._reduction or AngleReduction(none, none, none.astype(bool))
+            given, reduced, mask = (a.copy() for a in (current.given, current.reduced,
+                                                       current.mask))
+            moved = moved or AngleReduction(theta, theta, np.zeros(theta.shape, bool))
             rows = self.members[where]
-            given, reduced, mask = (a.copy() for a in (self._reduction.given,
-                                                       self._reduction.reduced,
-                                                       self._reduction.mask))
-            moved = AngleReduction.of(theta) or AngleReduction(theta, theta,
-                                                               np.zeros(theta.shape, bool))
             given[rows], reduced[rows], mask[rows] = moved.given, moved.reduced, moved.mask
             self._reduction = AngleReduction(given, reduced, mask)
             theta = moved.reduced
@@ -329,9 +331,8 @@ def simulate_segments(
                              f"({save_every}), got {segment_steps}")
     steps = min(segment_steps, n_steps)
     check_memory(memory_needed(model.n, method, members, steps // save_every + 1),
-                 f"a segment of {steps:.3g} steps keeping every {save_every}"
-                 + ("" if save_every == 1 else "th") + f" state of {members} "
-                 + ("trajectory" if members == 1 else "trajectories"),
+                 f"a segment of {steps:.3g} steps keeping {steps // save_every + 1:.3g} states of "
+                 + ("1 trajectory" if members == 1 else f"{members} trajectories"),
                  "Choose a smaller `segment_steps` (or leave it out: by default a segment "
                  "holds about 16 MB) or a larger `save_every`.")
     return SegmentedRun(model, theta0, start, p0 is not None, method=method, dt=dt,

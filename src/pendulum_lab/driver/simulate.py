@@ -88,6 +88,8 @@ WORK_BUDGET = 10**10
 # stepped in both variables, the conversions of the initial state, the counters).
 FLOATS_PER_STATE = (9, 3)
 FLOATS_PER_MEMBER = (3, 4)
+#: Bytes a run may need without asking the system how much memory it has available.
+SMALL_RUN = 2**26
 #: Initial angles larger than this [rad] are reduced by whole turns before a run
 #: (:class:`AngleReduction`): there floats are 2e-12 rad apart, 4000 times coarser than near pi.
 REDUCE_ANGLES_BEYOND = 2.0**13
@@ -284,7 +286,9 @@ def check_clock(model: PendulumModel, t0: float, span: float, dt: float,
     rounding exceeds :data:`CLOCK_ROUNDING_WARNING` of a step.
     """
     last = max(abs(t0), abs(t0 + span))
-    spacing = float(np.spacing(last))
+    spacing = math.ulp(last)
+    if last + abs(dt) != last and spacing <= CLOCK_ROUNDING_WARNING * abs(dt):
+        return  # the usual case, decided without asking the model
     driven = not model.is_autonomous
     if last + abs(dt) == last or (driven and spacing > CLOCK_ROUNDING_WARNING * abs(dt)):
         period = model.drive_period
@@ -297,15 +301,17 @@ def check_clock(model: PendulumModel, t0: float, span: float, dt: float,
         else:  # a family's periods
             remedy = ("The drive repeats with its period 2 pi / drive_frequency: start at t0 "
                       "modulo it for about the same drive phase.")
+    # the argument that makes the times large
+    where = f"`t0` = {t0:g} s" if abs(t0) >= abs(span) else f"`t0` + `t_end` = {t0 + span:g} s"
     if last + abs(dt) == last:
         raise ValueError(
-            f"`t0` = {t0:g} s: floats near t = {last:.3g} s are {spacing:.3g} s apart, more "
+            f"{where}: floats near t = {last:.3g} s are {spacing:.3g} s apart, more "
             f"than twice `dt` = {abs(dt):g} s, so t + dt == t and the clock of the run would "
             f"stand still. {remedy}"
         )
     if driven and spacing > CLOCK_ROUNDING_WARNING * abs(dt):
         warnings.warn(
-            f"`t0` = {t0:g} s: floats near t = {last:.3g} s are {spacing:.3g} s apart, "
+            f"{where}: floats near t = {last:.3g} s are {spacing:.3g} s apart, "
             f"{spacing / abs(dt):.2g} of `dt`, so the drive is evaluated at times rounded by "
             f"up to that much. {remedy}",
             RuntimeWarning,
@@ -321,13 +327,20 @@ class AngleReduction:
     depends on them through ``cos theta_i`` (gravity) and ``cos(theta_i - theta_j)`` (the rods'
     coupling), the damping torques on the angular velocities, the drive on the time. So the run
     from ``theta0 + 2 pi k`` is the run from ``theta0`` with every angle shifted by ``2 pi k``,
-    in canonical and in velocity variables alike. Far from zero, though, floats are spaced too
-    widely for the small changes of a step (1e15 rad: 0.125 rad apart, and a run there
-    made relative energy errors of 1e3). So angles beyond :data:`REDUCE_ANGLES_BEYOND` are
-    reduced exactly (:func:`~pendulum_lab.model.reduce_turns`) and the run steps from there;
-    the saved angles are given back as ``theta0 + (theta - reduced)``: they start at the
-    ``theta0`` given and are continuous (never wrapped), and the energies, velocities and
-    momenta are computed from the reduced angles, where they are accurate.
+    in canonical variables and in the velocity variables of ``*_velocity`` methods alike (a
+    whole turn changes neither ``omega`` nor ``p = M(theta) omega``). What is not periodic in the
+    angles is what a caller computes from them as numbers (an angle plotted against time, a
+    crossing of ``theta = 0`` rather than of ``0 mod 2 pi``): hence the angles given back. The
+    drive is periodic in ``t``, but that is no reason to reduce the time, whose saved values
+    must stay the caller's: a huge ``t0`` is refused or warned about instead (:func:`check_clock`).
+
+    Far from zero, floats are spaced too widely for the small changes of a step (1e15 rad: 0.125
+    rad apart, and a run there made relative energy errors of 1e3). So angles beyond
+    :data:`REDUCE_ANGLES_BEYOND` are reduced exactly (:func:`~pendulum_lab.model.reduce_turns`)
+    and the run steps from there; the saved angles are given back as ``theta0 + (theta -
+    reduced)``: they start at the ``theta0`` given and are continuous (never wrapped), and the
+    energies, velocities and momenta are computed from the reduced angles, where they are
+    accurate.
 
     Attributes
     ----------
@@ -534,8 +547,8 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     if method.variables == "velocity":
         with np.errstate(over="ignore", invalid="ignore"):  # a non-finite step, warned below
             y = row_models.momenta(q, y)
-    bad = ~(np.isfinite(q).all(axis=-1) & np.isfinite(y).all(axis=-1))
-    if bad.any():
+    if not (np.isfinite(q).all() and np.isfinite(y).all()):
+        bad = ~(np.isfinite(q).all(axis=-1) & np.isfinite(y).all(axis=-1))
         warn_not_finite(method, 1, t0 + dt, int(bad.sum()), members,
                         "the step returns it as computed.")
     if reduction is not None:
@@ -583,7 +596,13 @@ def memory_needed(n: int, method: Method, members: int, n_saved: int) -> float:
 
 def check_memory(needed: float, what: str, advice: str) -> None:
     """Refuse, before any work, ``what`` (a run) needing ``needed`` bytes if this machine does
-    not have them available now; ``advice`` says which arguments to change."""
+    not have them available now; ``advice`` says which arguments to change.
+
+    Runs below :data:`SMALL_RUN` bytes pass unasked: asking the system costs 0.1 ms, as much
+    as a short run.
+    """
+    if needed < SMALL_RUN:
+        return
     available = check.available_memory()
     if available is None or needed <= available:
         return
