@@ -301,7 +301,10 @@ _FIRST_USE_IN_A_PROCESS = textwrap.dedent("""\
     if what == "tiny_without_locks":
         cache.file_lock = lambda path: contextlib.nullcontext()
     open(ready, "w").close()
+    deadline = time.monotonic() + 300
     while not os.path.exists(go):  # both processes start their first use together
+        if time.monotonic() > deadline:
+            sys.exit("no go")
         time.sleep(0.005)
     start = time.perf_counter()
     if what == "kernels":
@@ -331,20 +334,28 @@ def _first_use_in_two_processes(tmp_path, what):
     tmp_path.mkdir(parents=True, exist_ok=True)
     folder = tmp_path / "cache"
     go = tmp_path / "go"
-    env = {**os.environ, "PENDULUM_LAB_CACHE": str(folder)}
+    # Numba's files go beside the generated ones, in the empty folder (not NUMBA_CACHE_DIR)
+    env = {**{k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"},
+           "PENDULUM_LAB_CACHE": str(folder)}
     ready = [tmp_path / f"ready{k}" for k in range(2)]
     processes = [subprocess.Popen([sys.executable, "-c", _FIRST_USE_IN_A_PROCESS, str(go), what,
                                    str(ready[k])], env=env, stdout=subprocess.PIPE,
                                   stderr=subprocess.PIPE, text=True) for k in range(2)]
-    deadline = time.monotonic() + 300
-    while not all(path.exists() for path in ready) and time.monotonic() < deadline:
-        time.sleep(0.01)  # both have imported the package
-    go.write_text("go")
-    reports = []
-    for process in processes:
-        out, err = process.communicate(timeout=600)
-        assert process.returncode == 0, err[-2000:]
-        reports.append(json.loads(out.strip().splitlines()[-1]))
+    try:
+        deadline = time.monotonic() + 300
+        while not all(path.exists() for path in ready) and time.monotonic() < deadline:
+            time.sleep(0.01)  # both have imported the package
+        go.write_text("go")
+        reports = []
+        for process in processes:
+            out, err = process.communicate(timeout=600)
+            assert process.returncode == 0, err[-2000:]
+            reports.append(json.loads(out.strip().splitlines()[-1]))
+    finally:
+        for process in processes:  # none is left waiting
+            if process.poll() is None:
+                process.kill()
+                process.wait()
     return reports, folder
 
 
