@@ -1,7 +1,8 @@
 # The two commands of the README:
 #   make lab    create the environment if needed and open JupyterLab on the course
 #               (options for JupyterLab: make lab ARGS="--no-browser --port 8899")
-#   make test   create or update the environment and run the whole test suite
+#   make test   create or update the environment and run the whole test suite, and the unit
+#               suite once more with the oldest supported versions (make test-floors)
 # and the course website:
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
 # and the instructor's kit:
@@ -19,11 +20,14 @@ extras_test := lab,test,docs,bench,assignments
 extras_docs := docs
 extras_bench := bench
 extras_assignments := lab,assignments
+# The environment with every dependency at its floor in pyproject.toml (tools/floor_pins.py).
+FLOORS_VENV ?= .venv-floors
+FLOORS_BIN := $(FLOORS_VENV)/bin
 # MathJax for the website, served from the site itself (from the npm registry, checked by npm).
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
-.PHONY: lab test check lint bench docs mathjax assignments clean
+.PHONY: lab test test-floors check lint bench docs mathjax assignments clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -32,6 +36,14 @@ $(BIN)/python:
 # One stamp per set of extras, made again when pyproject.toml changes.
 $(VENV)/.installed-%: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -e ".[$(extras_$*)]"
+	touch $@
+
+# The floors pinned, the test tools at their newest (the lab extra: the command line's tests).
+$(FLOORS_BIN)/.installed: pyproject.toml tools/floor_pins.py
+	$(PYTHON) -m venv $(FLOORS_VENV)
+	$(FLOORS_BIN)/python -m pip install --upgrade pip
+	$(FLOORS_BIN)/python tools/floor_pins.py > $(FLOORS_VENV)/floors.txt
+	$(FLOORS_BIN)/python -m pip install -e ".[lab,test]" -c $(FLOORS_VENV)/floors.txt
 	touch $@
 
 # The browser build of MathJax (es5/), without the SVG output and the other combined files.
@@ -57,10 +69,15 @@ assignments: $(VENV)/.installed-assignments
 lab: $(VENV)/.installed-lab
 	$(BIN)/pendulum-lab $(ARGS)
 
-# Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one).
-test: $(VENV)/.installed-test $(MATHJAX)
+# Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one); the
+# unit suite in the floor environment takes the core of the first to end.
+test: $(VENV)/.installed-test $(FLOORS_BIN)/.installed $(MATHJAX)
 	$(BIN)/ruff check .
-	$(BIN)/python tools/run_tests.py
+	$(BIN)/python tools/run_tests.py --floors $(FLOORS_BIN)/python
+
+# The unit suite (as make check) with the oldest supported versions: the floors of pyproject.toml.
+test-floors: $(FLOORS_BIN)/.installed
+	$(FLOORS_BIN)/python tools/run_tests.py --floors-only
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
 # the notebooks, the browser, the website, Binder or the graded assignments (docs/testing.md).
@@ -73,4 +90,5 @@ bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/run.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache docs/_build docs/_vendor docs/reference
+	rm -rf $(VENV) $(FLOORS_VENV) .venv-floors-caches .pytest_cache docs/_build docs/_vendor \
+		docs/reference

@@ -59,6 +59,18 @@ def integer_at_least(name: str, value, minimum: int) -> int:
     return int(value)
 
 
+def seed(name: str, value) -> int | None:
+    """A seed of NumPy's random generator as the package takes it: None or an integer >= 0."""
+    if value is None:
+        return None
+    accepted = f"`{name}` must be an integer >= 0 or None (a fresh random choice), got {value!r}"
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(accepted)
+    if value < 0:
+        raise ValueError(accepted)
+    return int(value)
+
+
 def index_below(name: str, value, size: int) -> int:
     """An integer in ``[0, size - 1]`` (a 0-based link number)."""
     value = integer_at_least(name, value, 0)
@@ -191,6 +203,19 @@ def physical_memory() -> int | None:
         return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     except (AttributeError, ValueError, OSError):
         return None
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new computation now (Linux's ``MemAvailable``: free
+    memory plus the caches the system can drop), else :func:`physical_memory`."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as info:
+            for line in info:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return physical_memory()
 
 
 def bytes_text(size: float) -> str:

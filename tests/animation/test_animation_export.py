@@ -83,7 +83,7 @@ def test_mp4_without_ffmpeg_says_what_to_install(sim, tmp_path, monkeypatch):
         ("swing.avi", {}, "must end in .gif or .mp4"),
         ("swing.gif", {"seconds": 0.0}, "`seconds` must be a positive number"),
         ("swing.gif", {"seconds": float("nan")}, "`seconds` must be finite"),
-        ("swing.gif", {"fps": -1}, "`fps` must be a positive number"),
+        ("swing.gif", {"fps": -1}, r"`fps` must be in \(0, 50\] frames per second"),
     ],
 )
 def test_bad_export_arguments_are_refused(sim, tmp_path, name, kwargs, message):

@@ -44,8 +44,7 @@ def recorded(monkeypatch):
 
 # --------------------------------------------------------------------------- parsing
 def parse(argv):
-    parser = cli.build_parser()
-    return parser.parse_args(cli._with_default_command(argv, parser.get_default("commands")))
+    return cli.parse_arguments(cli.build_parser(), argv)
 
 
 def test_lab_is_the_default_command():

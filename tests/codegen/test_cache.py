@@ -1,4 +1,4 @@
-"""The kernel cache: keys found from the code itself, and loading that two threads can share.
+"""The kernel cache: keys found from the code itself, and loading that threads and processes share.
 
 A generated module is named after a key of its source and of every package module it imports
 (transitively), read as syntax trees without docstrings. So editing a line of code anywhere
@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import json
 import os
 import subprocess
 import sys
 import textwrap
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -164,6 +166,7 @@ def test_without_the_lock_the_second_thread_sees_a_half_built_module(tmp_path, m
     # negative control: the race the lock prevents really happens with this source
     monkeypatch.setenv("PENDULUM_LAB_CACHE", str(tmp_path))
     monkeypatch.setattr(cache, "_LOADING", contextlib.nullcontext())
+    monkeypatch.setattr(cache, "file_lock", lambda path: contextlib.nullcontext())
     results, errors = _first_use_from_two_threads("race_control")
     assert len(errors) == 1 and isinstance(errors[0], AttributeError)
     sys.modules.pop(next(name for name in list(sys.modules) if "race_control" in name), None)
@@ -191,3 +194,190 @@ def test_two_threads_simulating_a_new_model_first_both_finish(tmp_path):
                             timeout=600)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "[]"
+
+
+def test_building_keys_from_many_threads_at_once_never_fails():
+    # CPython 3.11 keeps one recursion counter for building syntax trees: parsing from two
+    # threads at once failed with "SystemError: AST constructor recursion depth mismatch"
+    # inside a Dask worker. The keys are now built under the cache's lock.
+    errors = []
+
+    def keys():
+        try:
+            for k in range(20):
+                cache._parsed.cache_clear()
+                cache.code_key(f"from pendulum_lab.driver.loops import time_loop\nK = {k}\n")
+        except Exception as error:  # noqa: BLE001 (collected for the assertion)
+            errors.append(repr(error))
+
+    threads = [threading.Thread(target=keys) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert errors == []
+
+
+_DASK_FIRST_USE = textwrap.dedent("""\
+    import contextlib, importlib.machinery, json, sys, threading, time
+    from dask.distributed import Client, LocalCluster
+    import pendulum_lab as pl
+    from pendulum_lab.codegen import cache
+
+    without_locks = sys.argv[1] == "without_locks"
+    if without_locks:  # the negative control: no lock, and a module that takes a while to run
+        cache._LOADING = contextlib.nullcontext()
+        run_module = importlib.machinery.SourceFileLoader.exec_module
+        def slow(self, module):
+            if module.__name__.startswith(cache.MODULE_PREFIX):
+                time.sleep(1.0)
+            run_module(self, module)
+        importlib.machinery.SourceFileLoader.exec_module = slow
+    model = pl.double_pendulum(m2=0.75)  # first used here, in this process
+    # Found through sys.modules: Dask pickles the task, and a lock cannot be pickled.
+    BARRIER = threading.Barrier(2, timeout=60)
+
+    def first_use(k):
+        if without_locks:
+            time.sleep(0.3 * k)  # the second comes while the first is running the module
+        else:
+            sys.modules["__main__"].BARRIER.wait()  # both at once
+        start = time.perf_counter()
+        try:
+            traj = pl.simulate(model, [1.0, 0.5], [0.0, 0.0], t_end=1.0, dt=0.01, method="rk4")
+            outcome = traj.theta[-1].tolist()
+        except Exception as error:
+            outcome = f"{type(error).__name__}: {error}"
+        return threading.get_ident(), start, time.perf_counter(), outcome
+
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        futures = [client.submit(first_use, k, pure=False) for k in range(2)]
+        print(json.dumps(client.gather(futures)))
+    """)
+
+
+def _dask_first_use(variant):
+    pytest.importorskip("distributed")
+    result = subprocess.run([sys.executable, "-c", _DASK_FIRST_USE, variant],
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr[-2000:]
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def test_a_dask_worker_with_two_threads_uses_a_new_model_first_in_both():
+    (ident_a, start_a, end_a, theta_a), (ident_b, start_b, end_b, theta_b) = \
+        _dask_first_use("with_locks")
+    expected = pl.simulate(pl.double_pendulum(m2=0.75), [1.0, 0.5], [0.0, 0.0], t_end=1.0,
+                           dt=0.01, method="rk4").theta[-1].tolist()
+    assert theta_a == theta_b == expected
+    # not vacuous: two threads of the worker, both in their first use at the same time
+    assert ident_a != ident_b and max(start_a, start_b) < min(end_a, end_b)
+
+
+def test_without_the_locks_a_dask_worker_meets_a_race():
+    # negative control: the same worker, no lock, modules that take a second to run: the
+    # second thread meets the first's half-built module (AttributeError), or the two build
+    # syntax trees at once (SystemError from CPython's recursion counter)
+    outcomes = [outcome for *_, outcome in _dask_first_use("without_locks")]
+    failures = [o for o in outcomes if isinstance(o, str)]
+    assert len(failures) >= 1
+    assert all(o.startswith(("AttributeError", "SystemError: AST constructor")) for o in failures)
+
+
+# How Numba writes its cache (numba/core/caching.py): every index and data file goes to a
+# temporary name and is renamed into place, so no process reads half a file; but the number
+# of a new data file is chosen from the index read before compiling, so two processes
+# compiling one function at once can give two versions one number (numba/numba#10128). The
+# cache therefore makes one process compile a module and save it while the other waits and
+# loads: each function is compiled once, by one of them.
+_FIRST_USE_IN_A_PROCESS = textwrap.dedent("""\
+    import contextlib, json, os, sys, time
+    import pendulum_lab as pl
+    from pendulum_lab.codegen import cache, kernels
+    from pendulum_lab.driver import loops
+
+    go, what, ready = sys.argv[1], sys.argv[2], sys.argv[3]
+    if what == "tiny_without_locks":
+        cache.file_lock = lambda path: contextlib.nullcontext()
+    open(ready, "w").close()
+    deadline = time.monotonic() + 300
+    while not os.path.exists(go):  # both processes start their first use together
+        if time.monotonic() > deadline:
+            sys.exit("no go")
+        time.sleep(0.005)
+    start = time.perf_counter()
+    if what == "kernels":
+        model = pl.simple_pendulum(length=0.8)
+        traj = pl.simulate(model, [1.0], [0.0], t_end=1.0, dt=0.01, method="explicit_euler")
+        field = pl.hamiltonian_field(model)
+        compiled = loops.compile_method(pl.get_method("explicit_euler"), field, 1)
+        chain = kernels.load_kernels(1, False)
+        functions = {"run": compiled.run, "hamilton": chain.hamilton,
+                     "acceleration": chain.acceleration, "stages": chain.stages}
+        result = traj.theta[-1].tolist() + traj.p[-1].tolist()
+    else:
+        source = ("import time\\nimport numba\\ntime.sleep(1.0)\\n\\n\\n"
+                  "@numba.njit('float64(float64)', cache=True)\\ndef double(x):\\n"
+                  "    return 2.0 * x\\n")
+        module, _ = cache.load_generated("process_race", source)
+        functions, result = {"double": module.double}, [module.double(1.5)]
+    print(json.dumps({"start": start, "end": time.perf_counter(), "result": result,
+                      "misses": {k: sum(f.stats.cache_misses.values())
+                                 for k, f in functions.items()},
+                      "hits": {k: sum(f.stats.cache_hits.values())
+                               for k, f in functions.items()}}))
+    """)
+
+
+def _first_use_in_two_processes(tmp_path, what):
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    folder = tmp_path / "cache"
+    go = tmp_path / "go"
+    # Numba's files go beside the generated ones, in the empty folder (not NUMBA_CACHE_DIR)
+    env = {**{k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"},
+           "PENDULUM_LAB_CACHE": str(folder)}
+    ready = [tmp_path / f"ready{k}" for k in range(2)]
+    processes = [subprocess.Popen([sys.executable, "-c", _FIRST_USE_IN_A_PROCESS, str(go), what,
+                                   str(ready[k])], env=env, stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True) for k in range(2)]
+    try:
+        deadline = time.monotonic() + 300
+        while not all(path.exists() for path in ready) and time.monotonic() < deadline:
+            time.sleep(0.01)  # both have imported the package
+        go.write_text("go")
+        reports = []
+        for process in processes:
+            out, err = process.communicate(timeout=600)
+            assert process.returncode == 0, err[-2000:]
+            reports.append(json.loads(out.strip().splitlines()[-1]))
+    finally:
+        for process in processes:  # none is left waiting
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    return reports, folder
+
+
+def test_two_processes_compiling_new_kernels_into_one_empty_cache(tmp_path):
+    (a, b), folder = _first_use_in_two_processes(tmp_path, "kernels")
+    model = pl.simple_pendulum(length=0.8)
+    here = pl.simulate(model, [1.0], [0.0], t_end=1.0, dt=0.01, method="explicit_euler")
+    assert a["result"] == b["result"] == here.theta[-1].tolist() + here.p[-1].tolist()
+    # each function compiled once, by one of the two, and loaded from disk by the other
+    for name in a["misses"]:
+        assert a["misses"][name] + b["misses"][name] == 1, name
+        assert a["hits"][name] + b["hits"][name] == 1, name
+    # not vacuous: the cache folder was empty, and the two first uses overlapped in time
+    assert max(a["start"], b["start"]) < min(a["end"], b["end"])
+    assert any(folder.rglob("*.nbi"))
+
+
+def test_two_processes_share_a_tiny_module_and_without_the_lock_both_compile(tmp_path):
+    (a, b), _ = _first_use_in_two_processes(tmp_path / "locked", "tiny")
+    assert a["result"] == b["result"] == [3.0]
+    assert a["misses"]["double"] + b["misses"]["double"] == 1
+    # negative control: without the file lock both compile the same function at once
+    (a, b), _ = _first_use_in_two_processes(tmp_path / "unlocked", "tiny_without_locks")
+    assert a["result"] == b["result"] == [3.0]
+    assert a["misses"]["double"] + b["misses"]["double"] == 2

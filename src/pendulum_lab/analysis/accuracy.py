@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .. import validation as check
 from ..driver.simulate import Trajectory, simulate, velocity_state
 from ..integrators import get_method
 from ..model.pendulum import PendulumModel
@@ -134,7 +135,7 @@ def observed_order(model: PendulumModel, theta0, omega0=None, *, t_end: float = 
     t_end : float
         Time of the comparison [s]; each ``dt`` must divide it into whole steps.
     dts : sequence of float
-        Step sizes.
+        Step sizes, ``> 0``, at least two different ones (a slope needs two).
     method : str or Method
     reference : tuple of ndarray, optional
         ``(theta, omega)`` at ``t_end``.
@@ -145,9 +146,15 @@ def observed_order(model: PendulumModel, theta0, omega0=None, *, t_end: float = 
     """
     method = get_method(method)
     theta0, omega0 = velocity_state(model, theta0, omega0, p0)
+    dts = check.real_sequence("dts", dts)
+    for dt in dts:
+        check.positive_number("dts", float(dt))
+    if np.unique(dts).size < 2:
+        raise ValueError(f"`dts` must hold at least two different step sizes (a slope needs two "
+                         f"points), got {dts.tolist()}")
+    t_end = check.positive_number("t_end", t_end)
     if reference is None:
         reference = reference_solution(model, theta0, omega0, t_end=t_end)
-    dts = np.asarray(dts, float)
     errors = []
     for dt in dts:
         traj = simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method, keep="final")

@@ -13,10 +13,13 @@ overlaid.
 from __future__ import annotations
 
 import base64
+import os
 import re
+import subprocess
 import tempfile
 from pathlib import Path
 
+import numpy as np
 from matplotlib.animation import FFMpegWriter, HTMLWriter, PillowWriter
 from PIL import Image
 
@@ -29,11 +32,15 @@ from ..plotting.scene import (
     check_run,
     encode_frame,
     export_scene,
+    frame_count,
     frame_indices,
+    scene_runs,
 )
 
 __all__ = [
+    "MAX_FPS",
     "MAX_FRAMES",
+    "MAX_SAVED_FRAMES",
     "count_frames",
     "html_animation",
     "save_animation",
@@ -42,6 +49,13 @@ __all__ = [
 
 #: Default cap on the frames of :func:`html_animation` (each is an embedded PNG).
 MAX_FRAMES = 300
+#: Default cap on the frames of :func:`save_animation`: 2.5 minutes at the default 20 fps.
+MAX_SAVED_FRAMES = 3000
+#: The highest frame rate of each output [frames per second]: a GIF stores each frame's delay
+#: in whole hundredths of a second and browsers slow delays under 0.02 s down to 0.1 s; the
+#: HTML player runs at most at a screen's 60 frames per second; an MP4 plays 120 on screens
+#: that have them.
+MAX_FPS = {"html": 60, ".gif": 50, ".mp4": 120}
 # matplotlib's player links its button icons from a CDN; an animation must not load anything
 # from outside (JupyterLab and the course website have the icon font already).
 _EXTERNAL_LINK = re.compile(r"<link\b[^>]*\bhref=[\"']https?://[^>]*>\s*", re.IGNORECASE)
@@ -98,6 +112,59 @@ class _BlittingMP4Writer(_Blitting, FFMpegWriter):
         self._proc.stdin.write(self._blit())
 
 
+def _frames(traj, model, fps: float, speed: float, dpi: float, kind: str, max_frames: int,
+            seconds: float | None = None) -> np.ndarray:
+    """The frames of an export, once its arguments are checked (before any is drawn)."""
+    first = check_run(traj, model)
+    fps = check.number_in("fps", fps, 0, MAX_FPS[kind], "frames per second", open_low=True)
+    speed = check.positive_number("speed", speed)
+    check.positive_number("dpi", dpi)
+    runs = scene_runs(traj)[0]
+    for k, run in enumerate(runs):
+        finite = np.isfinite(run.theta).all(axis=-1) & np.isfinite(run.energy)
+        if not finite.all():
+            which = f" (run {k})" if len(runs) > 1 else ""
+            raise ValueError(
+                f"`traj`{which} holds non-finite angles or energies from t = "
+                f"{run.t[np.argmin(finite)]:g} s on (the run blew up; completed = "
+                f"{run.completed}), which no frame can show: run it with a smaller `dt`"
+            )
+    count = frame_count(first, fps, speed)
+    if seconds is not None:
+        count = min(count, max(1, round(check.positive_number("seconds", seconds) * fps)))
+    if count > max_frames:
+        raise ValueError(
+            f"the animation would have {count} frames, more than `max_frames` = {max_frames}; "
+            + ("shorten it (`seconds`), " if kind != "html" else "shorten the run, ")
+            + "raise `speed` or lower `fps`"
+            + ("" if kind == "html" else ", or raise `max_frames`")
+        )
+    return frame_indices(first, fps, speed, limit=count)
+
+
+def _writable(path) -> Path:
+    """``path`` (a .gif or .mp4 file) if a file can be written there, checked by creating it."""
+    try:
+        path = Path(path)
+    except TypeError:
+        raise TypeError(f"`path` must be a file path, got {type(path).__name__}") from None
+    if path.suffix.lower() not in (".gif", ".mp4"):
+        raise ValueError(f"`path` must end in .gif or .mp4, got {path.name!r}")
+    if not path.parent.is_dir():
+        raise ValueError(f"`path` must be in an existing folder, but {str(path.parent)!r} is "
+                         "not one")
+    existed = path.exists()
+    try:
+        with open(path, "ab"):
+            pass
+    except OSError as err:
+        raise ValueError(f"`path` must be a file that can be written, but {str(path)!r} cannot "
+                         f"be ({err.strerror or err})") from None
+    if not existed:
+        os.remove(path)
+    return path
+
+
 def html_animation(
     traj,
     model: PendulumModel,
@@ -127,13 +194,13 @@ def html_animation(
         A single trajectory of ``model``, or up to five saved at the same times.
     model : PendulumModel
     fps : float
-        Frames per second of the player, ``> 0``.
+        Frames per second of the player, in ``(0, 60]``.
     speed : float
         Simulated seconds per real second, ``> 0``.
     trail : float
         Trail length [s].
     dpi : float
-        Resolution of the frames; the figure is 9 x 3.6 inches.
+        Resolution of the frames, ``> 0``; the figure is 9 x 3.6 inches.
     max_frames : int
         Refuse to make more frames than this (the output grows by tens of
         kilobytes per frame): shorten the run, or raise ``speed`` or lower
@@ -161,14 +228,8 @@ def html_animation(
     """
     from IPython.display import HTML
 
-    first = check_run(traj, model)
     max_frames = check.integer_at_least("max_frames", max_frames, 1)
-    frames = frame_indices(first, fps, speed)
-    if len(frames) > max_frames:
-        raise ValueError(
-            f"the animation would have {len(frames)} frames, more than `max_frames` = "
-            f"{max_frames}; shorten the run, raise `speed` or lower `fps`"
-        )
+    frames = _frames(traj, model, fps, speed, dpi, "html", max_frames)
     figure, scene = export_scene(traj, model, trail, dpi, labels)
     writer = _BlittingHTMLWriter(
         scene, fps=fps, default_mode="loop", embed_limit=max_frames
@@ -210,6 +271,7 @@ def save_animation(
     trail: float = TRAIL,
     dpi: float = 80,
     labels=None,
+    max_frames: int = MAX_SAVED_FRAMES,
 ) -> Path:
     """Write a run as an animated GIF or an MP4 video, for slides.
 
@@ -226,9 +288,10 @@ def save_animation(
         (overlaid, as in :func:`html_animation`).
     model : PendulumModel
     path : str or Path
-        Ends in ``.gif`` or ``.mp4``.
+        Ends in ``.gif`` or ``.mp4``, in an existing folder.
     fps : float
-        Frames per second of the file, ``> 0``.
+        Frames per second of the file, in ``(0, 50]`` for a GIF and ``(0, 120]``
+        for an MP4 (:data:`MAX_FPS`).
     seconds : float, optional
         Length of the animation [s of playing time], ``> 0``; by default the
         whole run. Never more frames than the run has.
@@ -237,9 +300,12 @@ def save_animation(
     trail : float
         Trail length [s].
     dpi : float
-        Resolution; the figure is 9 x 3.6 inches.
+        Resolution, ``> 0``; the figure is 9 x 3.6 inches.
     labels : sequence of str, optional
         Names of the runs in the legend when there are several.
+    max_frames : int
+        Refuse to make more frames than this (:data:`MAX_SAVED_FRAMES` by
+        default): a mistyped ``fps`` or ``speed`` would otherwise draw for hours.
 
     Returns
     -------
@@ -250,6 +316,11 @@ def save_animation(
     ------
     ImportError
         For ``.mp4`` without ``imageio-ffmpeg``, saying how to install it.
+    ValueError
+        Before any frame is drawn, for a ``path`` that cannot be written, a run
+        that blew up (non-finite states), or too many frames.
+    RuntimeError
+        If ffmpeg fails while writing the MP4 (its message is included).
 
     Examples
     --------
@@ -265,23 +336,25 @@ def save_animation(
     """
     from matplotlib import rc_context
 
-    first = check_run(traj, model)
-    path = Path(path)
+    max_frames = check.integer_at_least("max_frames", max_frames, 1)
+    check_run(traj, model)
+    path = _writable(path)
     suffix = path.suffix.lower()
-    if suffix not in (".gif", ".mp4"):
-        raise ValueError(f"`path` must end in .gif or .mp4, got {path.name!r}")
-    frames = frame_indices(first, fps, speed)
-    if seconds is not None:
-        seconds = check.positive_number("seconds", seconds)
-        frames = frames[: max(1, round(seconds * fps))]
+    frames = _frames(traj, model, fps, speed, dpi, suffix, max_frames, seconds)
     settings = {} if suffix == ".gif" else {"animation.ffmpeg_path": _ffmpeg()}
     figure, scene = export_scene(traj, model, trail, dpi, labels)
     if suffix == ".gif":
         writer = _BlittingGIFWriter(scene, fps=fps)
     else:
         writer = _BlittingMP4Writer(scene, fps=fps, codec="h264")
-    with rc_context(settings), writer.saving(figure, str(path), dpi):
-        for index in frames:
-            scene.show(index)
-            writer.grab_frame()
+    try:
+        with rc_context(settings), writer.saving(figure, str(path), dpi):
+            for index in frames:
+                scene.show(index)
+                writer.grab_frame()
+    except (subprocess.CalledProcessError, BrokenPipeError) as err:
+        detail = getattr(err, "stderr", None) or b""
+        detail = detail.decode(errors="replace").strip() if isinstance(detail, bytes) else detail
+        raise RuntimeError(f"ffmpeg could not write {str(path)!r}"
+                           + (f": {detail}" if detail else f" ({err})")) from None
     return path

@@ -18,7 +18,9 @@ Usage::
 
 ``--dir`` given explicitly always copies, also from a checkout (a scratch
 copy of the course). Options after ``--`` go to JupyterLab unchanged, for
-example ``pendulum-lab -- --allow-root`` inside a container running as root.
+example ``pendulum-lab -- --allow-root`` inside a container running as root;
+anything else the command does not know is an error (a mistyped command, such
+as ``pendulum-lab bogus``, lists the commands instead of starting JupyterLab).
 
 Adding a subcommand from another module
 ---------------------------------------
@@ -42,7 +44,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["CopyReport", "build_parser", "copy_course", "lab_command", "main"]
+__all__ = ["CopyReport", "build_parser", "copy_course", "lab_command", "main", "parse_arguments"]
 
 DEFAULT_DIR = "pendulum_lab_course"
 START_NOTEBOOK = "00_start_here.ipynb"
@@ -266,6 +268,7 @@ def _add_lab_command(subparsers) -> None:
     )
     lab.add_argument("--no-browser", action="store_true", help="do not open a browser")
     lab.add_argument("--port", type=_port, default=None, help="port for JupyterLab")
+    # Filled only from the words after `--` (parse_arguments refuses any other).
     lab.add_argument(
         "jupyter_options",
         nargs="*",
@@ -278,6 +281,17 @@ def _add_lab_command(subparsers) -> None:
 def _progress_lines(done: int, total: int, what: str) -> None:
     """``pendulum-lab warmup --progress lines``: one line per job (``warmup.PROGRESS_LINE``)."""
     print(f"{done}/{total} {what}", flush=True)
+
+
+def _links(text: str) -> int:
+    """A chain length for ``warmup --n``: a whole number of links, at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number of links, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a number of links >= 1, got {value}")
+    return value
 
 
 def run_warmup(args) -> int:
@@ -301,7 +315,7 @@ def _add_warmup_command(subparsers) -> None:
         description="Compile, or load from the disk cache, every integrator kernel for the "
         "given chain lengths. Run once after installing to make the first notebook fast.",
     )
-    warm.add_argument("--n", type=int, nargs="+", default=[1, 2], metavar="N",
+    warm.add_argument("--n", type=_links, nargs="+", default=[1, 2], metavar="N",
                       help="chain lengths (numbers of links) to prepare (default: 1 2)")
     warm.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
                       help="methods to prepare (default: all of them)")
@@ -336,19 +350,42 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _with_default_command(argv: list[str], commands) -> list[str]:
-    """Insert ``lab`` unless a command or a top-level help/version flag is present."""
-    if argv and (argv[0] in commands or argv[0] in ("-h", "--help", "--version")):
-        return argv
-    return ["lab", *argv]
+_TOP_LEVEL = ("-h", "--help", "--version")
+
+
+def parse_arguments(parser: argparse.ArgumentParser, argv: Sequence[str]) -> argparse.Namespace:
+    """``argv`` parsed by ``parser`` (:func:`build_parser`), with ``lab`` as the default command.
+
+    ``lab`` is inserted when the words before ``--`` are empty or start with an option (a
+    top-level ``--help`` or ``--version`` excepted). A first word that is no command is an
+    error listing the commands; words after ``--`` are JupyterLab's options (for ``lab``
+    only), and no other word reaches JupyterLab. Errors exit with status 2 and the usage, as
+    argparse's own do.
+    """
+    argv = list(argv)
+    split = argv.index("--") if "--" in argv else len(argv)
+    head, tail = argv[:split], argv[split + 1:]
+    commands = parser.get_default("commands")
+    if not head or (head[0].startswith("-") and head[0] not in _TOP_LEVEL):
+        head = ["lab", *head]
+    elif head[0] not in commands and head[0] not in _TOP_LEVEL:
+        parser.error(f"unknown command {head[0]!r}; the commands are {', '.join(commands)} "
+                     "(options for JupyterLab go after `--`: pendulum-lab -- --allow-root)")
+    args = parser.parse_args(head + argv[split:])
+    if args.command == "lab" and list(args.jupyter_options) != tail:
+        extra = [word for word in args.jupyter_options if word not in tail]
+        parser.error(f"unrecognized arguments: {' '.join(extra)} (options for JupyterLab go "
+                     "after `--`)")
+    if args.command != "lab" and tail:
+        parser.error(f"options after `--` go to JupyterLab, which only `lab` starts; "
+                     f"`{args.command}` got {' '.join(tail)}")
+    return args
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``pendulum-lab``; returns the exit status."""
     parser = build_parser()
-    argv = list(sys.argv[1:] if argv is None else argv)
-    commands = parser.get_default("commands")
-    args = parser.parse_args(_with_default_command(argv, commands))
+    args = parse_arguments(parser, sys.argv[1:] if argv is None else argv)
     return args.handler(args)
 
 

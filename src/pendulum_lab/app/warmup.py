@@ -80,7 +80,12 @@ def warm_up_jobs(ns=(1, 2), methods=None) -> list[Job]:
     nothing for a method that cannot integrate it.
     """
     everything = [*METHODS, *CONFORMAL_METHODS, *VARIATIONAL_METHODS]
+    if isinstance(methods, str):
+        methods = [methods]
     names = [get_method(m).name for m in (everything if methods is None else methods)]
+    if isinstance(ns, (int, np.integer)) or not hasattr(ns, "__iter__"):
+        raise TypeError(f"`ns` must be a sequence of chain lengths (numbers of links), such as "
+                        f"[1, 2], got {ns!r}")
     ns = [check.integer_at_least("ns", n, 1) for n in ns]
     jobs = [Job(f"{name} for {chain_description(n)}", lambda n=n, name=name: _run_method(n, name))
             for n in ns for name in names]

@@ -29,6 +29,7 @@ import numpy as np
 from .. import validation as check
 from ..driver.cluster import check_client, map_members, portable_method
 from ..driver.segments import default_segment_steps
+from ..driver.simulate import check_run_length
 from ..integrators import get_method
 from ..model import FAMILY_PARAMETERS, require_model
 from ..model.angles import wrap_angle
@@ -330,6 +331,12 @@ def bifurcation_diagram(
     transient_periods = check.integer_at_least("transient_periods", transient_periods, 0)
     steps_per_period = check.integer_at_least("steps_per_period", steps_per_period, 1)
     theta0, omega0 = _starts(model, theta0, omega0)
+    check_run_length((transient_periods + n_periods) * steps_per_period,
+                     len(values) * len(theta0), opt_in=False,
+                     what=f"{len(values)} `values` over `transient_periods` + `n_periods` = "
+                     f"{transient_periods + n_periods} periods of `steps_per_period` = "
+                     f"{steps_per_period} steps",
+                     advice="Choose fewer `values` or periods, or fewer `steps_per_period`")
     if parameter == "drive_frequency":
         family, ratio = _common_period_family(model, values)
     else:

@@ -270,6 +270,7 @@ def lyapunov_benettin(
         model, theta0, omega0, p0, t_end, dt, "renormalize_every", renormalize_every
     )
     delta = check.positive_number("delta", delta)
+    seed = check.seed("seed", seed)
     method = get_method(method)
     client = check_client(client)
     start = time.perf_counter()
@@ -483,6 +484,7 @@ def lyapunov_variational(
     True
     """
     require_model(model)
+    seed = check.seed("seed", seed)
     t, running, name, dt, seconds = _tangent_growth(
         model, theta0, omega0, p0, t_end=t_end, dt=dt, method=method, save_every=save_every,
         t0=t0, progress=progress, directions=unit_direction(2 * model.n, seed)[:, None],
@@ -780,6 +782,7 @@ def lyapunov_by_energy(
                          f"({lowest:.6g} J), got {energies.tolist()}")
     orbits = check.integer_at_least("orbits", orbits, 2)
     threshold = check.positive_number("threshold", threshold)
+    seed = check.seed("seed", seed)
     starts = [section_spread(model, energy, orbits) for energy in energies]
     theta0 = np.concatenate([theta for theta, _ in starts])
     omega0 = np.concatenate([omega for _, omega in starts])

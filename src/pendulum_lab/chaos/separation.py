@@ -101,7 +101,7 @@ def separation(
     """
     theta0, p0 = canonical_state(model, theta0, omega0, p0)
     delta = check.positive_number("delta", delta)
-    theta1, p1 = perturbed(theta0, p0, delta, seed)
+    theta1, p1 = perturbed(theta0, p0, delta, check.seed("seed", seed))
     traj = simulate(model, np.stack([theta0, theta1]), p0=np.stack([p0, p1]), t_end=t_end,
                     dt=dt, method=method, save_every=save_every, progress=progress)
     distance = phase_distance(

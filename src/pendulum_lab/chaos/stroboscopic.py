@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import validation as check
 from ..driver.segments import simulate_segments
+from ..driver.simulate import check_run_length
 from ..model import require_model
 from ..model.angles import wrap_angle
 from ..model.pendulum import PendulumModel
@@ -208,6 +209,10 @@ def stroboscopic_section(
     transient_periods = check.integer_at_least("transient_periods", transient_periods, 0)
     steps_per_period = check.integer_at_least("steps_per_period", steps_per_period, 1)
     total = transient_periods + n_periods
+    check_run_length(total * steps_per_period, 1, opt_in=False,
+                     what=f"`transient_periods` + `n_periods` = {total} periods of "
+                     f"`steps_per_period` = {steps_per_period} steps",
+                     advice="Choose fewer periods or fewer `steps_per_period`")
     run = simulate_segments(model, theta0, omega0, p0=p0, t_end=total * period,
                             dt=period / steps_per_period, method=method,
                             save_every=steps_per_period, t0=t0, progress=progress,

@@ -13,13 +13,29 @@ reading the code, not listed by hand (:func:`code_key`):
 * the versions of Python, NumPy, Numba and llvmlite.
 
 A module of the package that a key needs but cannot find is an error, never a stale load.
-Loading is thread-safe: a generated module is executed (and its kernels compiled) by one thread
-while others that need it wait, and only a complete module is ever handed out.
+
+Loading is safe from several threads and from several processes sharing a cache folder:
+
+* **threads:** a generated module is executed (and its kernels compiled) by one thread while
+  others that need it wait, and only a complete module is ever handed out. The keys are
+  computed under the same lock: CPython 3.11 keeps one recursion counter for building syntax
+  trees per interpreter, and two threads parsing at once can fail with "SystemError: AST
+  constructor recursion depth mismatch" (python/cpython#106905), which a Dask worker with two
+  threads met on first use;
+* **processes:** Numba writes each cache file to a temporary name and renames it into place, so
+  no process reads a half-written file, but it picks the file number of a new compiled version
+  from the index it read before compiling: two processes compiling one function at once can give
+  two versions one number, so that the index and the data disagree (numba/numba#10128). So a
+  generated module is written, executed and first called (where Numba compiles it or loads it
+  from disk) under an exclusive lock on a file beside it (``<module>.lock``, :func:`file_lock`):
+  the first process compiles and saves, the second waits and loads. Where the system has no
+  ``fcntl`` (Windows) only the threads of one process are kept apart.
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import functools
 import hashlib
 import importlib.metadata
@@ -42,6 +58,7 @@ __all__ = [
     "PACKAGE",
     "cache_dir",
     "code_key",
+    "file_lock",
     "imported_modules",
     "load_generated",
     "module_dependencies",
@@ -51,6 +68,7 @@ PACKAGE = "pendulum_lab"
 _PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 #: Generated modules are imported under this prefix (followed by their stem and key).
 MODULE_PREFIX = "pendulum_lab_kernels_"
+#: Held while a module is generated, keyed or loaded (and while syntax trees are built).
 _LOADING = threading.RLock()
 
 
@@ -119,7 +137,8 @@ def _parsed(module: str) -> tuple[str, frozenset[str]]:
     if path is None:
         raise ImportError(f"generated code depends on {module}, which is not a module of the "
                           f"package at {_PACKAGE_ROOT}: regenerate it from the current code")
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    with _LOADING:  # building syntax trees from two threads at once can fail (see above)
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     imports = imported_modules(tree, module, path.name == "__init__.py")
     return ast.dump(_without_docstrings(tree)), frozenset(imports - {module})
 
@@ -174,7 +193,8 @@ def code_key(source: str, generator: str | None = None, inject: dict | None = No
     ``generator`` is the package module that wrote ``source``; ``inject`` the objects set as
     module globals before the source runs (their modules and constants count too).
     """
-    tree = ast.parse(source)
+    with _LOADING:  # building syntax trees from two threads at once can fail (see above)
+        tree = ast.parse(source)
     modules = set(imported_modules(tree, "generated", False))
     constants = []
     if generator is not None and generator.startswith(PACKAGE):
@@ -204,6 +224,28 @@ def _write_if_changed(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
+@contextlib.contextmanager
+def file_lock(path: Path):
+    """An exclusive lock on ``path`` (created if missing), shared by every process and thread.
+
+    Each use opens the file anew, and ``flock`` locks belong to an open file, so two threads of
+    one process exclude each other as two processes do. Without ``fcntl`` (Windows) it locks
+    nothing; the caller's threads are then kept apart by :data:`_LOADING` alone.
+    """
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover (Windows)
+        yield
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def load_generated(stem: str, source: str, inject: dict | None = None,
                    what: str | None = None):
     """Write generated Python ``source`` into the kernel cache folder (if new) and import it.
@@ -219,27 +261,31 @@ def load_generated(stem: str, source: str, inject: dict | None = None,
     from Numba's disk cache; that is announced as a compilation of ``what`` (for people:
     "glrk4 for the double pendulum"; by default the stem), expected to load when the file
     was already there (:func:`~pendulum_lab.codegen.compile_status.compiling`).
+
+    The file is written and executed under :func:`file_lock` of ``<stem>_<key>.lock``, so that
+    one process compiles and saves while another waits, then loads.
     """
     caller = inspect.currentframe().f_back
     generator = caller.f_globals.get("__name__") if caller is not None else None
-    key = code_key(source, generator, inject)
-    path = cache_dir() / f"{stem}_{key}.py"
-    name = f"{MODULE_PREFIX}{stem}_{key}"
     with _LOADING:  # one thread builds a module; the others wait and get the finished one
+        key = code_key(source, generator, inject)
+        path = cache_dir() / f"{stem}_{key}.py"
+        name = f"{MODULE_PREFIX}{stem}_{key}"
         if name in sys.modules:
             return sys.modules[name], path
-        seen_before = path.exists()
-        _write_if_changed(path, source)
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
-        module.__dict__.update(inject or {})
-        # Registered before it runs, as the import system does: Numba's cache finds a
-        # function's file through its module. Removed again if it fails.
-        sys.modules[name] = module
-        try:
-            with compiling(what or f"the generated module {stem}", loading=seen_before):
-                spec.loader.exec_module(module)
-        except BaseException:
-            del sys.modules[name]
-            raise
+        with file_lock(path.with_suffix(".lock")):  # and one process
+            seen_before = path.exists()
+            _write_if_changed(path, source)
+            spec = importlib.util.spec_from_file_location(name, path)
+            module = importlib.util.module_from_spec(spec)
+            module.__dict__.update(inject or {})
+            # Registered before it runs, as the import system does: Numba's cache finds a
+            # function's file through its module. Removed again if it fails.
+            sys.modules[name] = module
+            try:
+                with compiling(what or f"the generated module {stem}", loading=seen_before):
+                    spec.loader.exec_module(module)
+            except BaseException:
+                del sys.modules[name]
+                raise
     return module, path

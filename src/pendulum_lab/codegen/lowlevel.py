@@ -2,8 +2,8 @@
 
 The rest of the package is ordinary Numba code; what it cannot say in Numba's own language is
 here, each device with what it buys (measured on the double pendulum, x86-64, Numba 0.68 and
-llvmlite 0.50, the versions it was checked with; ``pyproject.toml`` keeps Numba below its next
-minor version for this reason):
+llvmlite 0.50). Its tests pass with every minor release of Numba from 0.61 (llvmlite 0.44) to
+0.68; ``pyproject.toml`` keeps Numba below its next minor version until that one is checked:
 
 * **Views without a reference count** (:func:`span`, :func:`vector`, :func:`block`,
   :func:`unmanaged`): slices of a step's workspace. An ordinary slice is reference counted:

@@ -54,6 +54,8 @@ def check_client(client):
         A client is given but Dask is not installed.
     TypeError
         ``client`` is something else.
+    ValueError
+        ``client`` is closed (or not yet connected).
     """
     if client is None:
         return None
@@ -65,6 +67,10 @@ def check_client(client):
     if not isinstance(client, Client):
         raise TypeError(f"`client` must be a dask.distributed.Client or None, got "
                         f"{type(client).__name__}")
+    status = getattr(client, "status", "running")
+    if status != "running":
+        raise ValueError(f"`client` must be a running dask.distributed.Client, but this one is "
+                         f"{status!r}: start a new Client (or pass client=None to compute here)")
     return client
 
 

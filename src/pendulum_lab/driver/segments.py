@@ -41,10 +41,14 @@ from ..codegen.compile_status import compile_seconds
 from ..model import PendulumModel
 from .loops import compile_method
 from .simulate import (
+    AngleReduction,
     Trajectory,
+    check_memory,
     check_method_fits,
+    check_progress,
     hamiltonian_field,
     integrate,
+    memory_needed,
     progress_bar,
     run_arguments,
     to_method_variables,
@@ -149,6 +153,12 @@ class SegmentedRun:
         self.batch_shape = theta0.shape[:-1]
         self.model = model.for_ensemble(self.batch_shape)
         self._theta = theta0.reshape(-1, model.n).copy()
+        self._size = self._theta.shape[0]
+        # Huge angles step reduced by whole turns; the segments show them continued from
+        # the angles given (see AngleReduction).
+        self._reduction = AngleReduction.of(self._theta, stacklevel=4)
+        if self._reduction is not None:
+            self._theta = self._reduction.reduced.copy()
         self._state = to_method_variables(self.model, method, self._theta,
                                            start.reshape(-1, model.n), given_momenta)
         # What the method carries from step to step (its last stage slopes, the
@@ -196,6 +206,9 @@ class SegmentedRun:
                 self._state = own[-1].reshape(-1, n)
                 if bar is not None:
                     bar.update(steps)
+                if self._reduction is not None:
+                    segment = self._reduction.select(self.members).restored(
+                        segment, (len(self.members),))
                 yield segment
         finally:
             if bar is not None:
@@ -241,6 +254,17 @@ class SegmentedRun:
                              f"{p.shape}")
         # Copies: the current state is a view into the last segment handed out.
         self._theta, self._state = self._theta.copy(), self._state.copy()
+        moved = AngleReduction.of(theta)  # the new angles are given as the segments show them
+        if moved is not None or self._reduction is not None:
+            none = np.zeros((self._size, n))
+            current = self._reduction or AngleReduction(none, none, none.astype(bool))
+            given, reduced, mask = (a.copy() for a in (current.given, current.reduced,
+                                                       current.mask))
+            moved = moved or AngleReduction(theta, theta, np.zeros(theta.shape, bool))
+            rows = self.members[where]
+            given[rows], reduced[rows], mask[rows] = moved.given, moved.reduced, moved.mask
+            self._reduction = AngleReduction(given, reduced, mask)
+            theta = moved.reduced
         self._theta[where] = theta
         moved = self.model.select(where) if self.model.shape else self.model
         self._state[where] = to_method_variables(moved, self.method, theta, p,
@@ -262,6 +286,7 @@ def simulate_segments(
     segment_steps: int | None = None,
     progress: bool | None = None,
     label: str | None = None,
+    allow_long_run: bool = False,
 ) -> SegmentedRun:
     """A run of :func:`~pendulum_lab.simulate`, handed out in consecutive segments.
 
@@ -280,23 +305,42 @@ def simulate_segments(
         One progress bar for the whole run; by default only for long runs.
     label : str, optional
         Text of the progress bar (default: the method's name).
+    allow_long_run : bool
+        Run even beyond the work budget (see :func:`~pendulum_lab.simulate`).
 
     Returns
     -------
     SegmentedRun
         Iterate over it for the segments.
+
+    Raises
+    ------
+    ValueError
+        For invalid arguments, and before any work for a run beyond the work
+        budget without ``allow_long_run``, or one whose segments would not fit
+        in the memory available (the message names ``segment_steps``).
     """
     method, theta0, start, (t_end, dt, n_steps), save_every, t0 = run_arguments(
-        model, theta0, omega0, p0, t_end, dt, method, save_every, t0
+        model, theta0, omega0, p0, t_end, dt, method, save_every, t0, allow_long_run
     )
+    progress = check_progress(progress)
+    if label is not None and not isinstance(label, str):
+        raise TypeError(f"`label` must be a string (the progress bar's text), got "
+                        f"{type(label).__name__}")
+    members = theta0.size // model.n
     if segment_steps is None:
-        segment_steps = default_segment_steps(model.n, max(1, theta0.size // model.n), n_steps,
-                                              save_every)
+        segment_steps = default_segment_steps(model.n, members, n_steps, save_every)
     else:
         segment_steps = check.integer_at_least("segment_steps", segment_steps, 1)
         if segment_steps % save_every:
             raise ValueError(f"`segment_steps` must be a multiple of `save_every` "
                              f"({save_every}), got {segment_steps}")
+    steps = min(segment_steps, n_steps)
+    check_memory(memory_needed(model.n, method, members, steps // save_every + 1),
+                 f"a segment of {steps:.3g} steps keeping {steps // save_every + 1:.3g} states of "
+                 + ("1 trajectory" if members == 1 else f"{members} trajectories"),
+                 "Choose a smaller `segment_steps` (or leave it out: by default a segment "
+                 "holds about 16 MB) or a larger `save_every`.")
     return SegmentedRun(model, theta0, start, p0 is not None, method=method, dt=dt,
                         t_end=t_end, n_steps=n_steps, save_every=save_every,
                         segment_steps=segment_steps, t0=t0, progress=progress,

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import time
 import warnings
 from dataclasses import dataclass
@@ -32,7 +33,7 @@ from ..integrators import (
     suitable_methods,
     unsuitability,
 )
-from ..model import PendulumModel, require_model
+from ..model import PendulumModel, reduce_turns, require_model
 from .loops import (
     CALLS,
     NOT_CONVERGED,
@@ -46,12 +47,17 @@ from .loops import (
 )
 
 __all__ = [
+    "AngleReduction",
     "Trajectory",
     "canonical_state",
+    "check_clock",
+    "check_memory",
     "check_method_fits",
+    "check_run_length",
     "hamiltonian_field",
     "initial_state",
     "integrate",
+    "memory_needed",
     "progress_bar",
     "run_arguments",
     "simulate",
@@ -60,6 +66,7 @@ __all__ = [
     "time_grid",
     "to_method_variables",
     "velocity_state",
+    "warn_not_finite",
 ]
 
 # Show a progress bar by default once a run does this many state updates
@@ -69,10 +76,28 @@ PROGRESS_THRESHOLD = 2_000_000
 CHUNK_WORK = 200_000
 # The compiled loop counts steps in int64; stay well clear of its end.
 MAX_STEPS = 2**62
-# Floats a run holds per kept state: per member and link (theta and the saved
-# momenta while stepping; theta, omega, p afterwards), and per member (the
-# three energies). A lower bound of what a run needs.
-FLOATS_PER_STATE = (5, 3)
+#: State updates (steps times trajectories) a run may take without ``allow_long_run=True``:
+#: hours of computing at about a microsecond per update (RK4 on the double pendulum takes
+#: 0.45 us, Gauss-Legendre methods and long chains more), 25 times the largest run of the
+#: course (a basin map of 40,000 releases over 10,000 steps).
+WORK_BUDGET = 10**10
+# Floats a run holds at its peak, found with tracemalloc for chains of 1 to 12 links and
+# explicit, implicit and symplectic methods (tests/driver/test_run_limits.py checks it): per
+# kept state of a member, 9 per link plus 3 (the states saved while stepping, theta, omega, p
+# and the energies afterwards, and the temporaries that convert them); per member, the
+# method's memory (``method.kernel.memory(n)``) plus 3 per link plus 4 (the state being
+# stepped in both variables, the conversions of the initial state, the counters).
+FLOATS_PER_STATE = (9, 3)
+FLOATS_PER_MEMBER = (3, 4)
+#: Bytes a run may need without asking the system how much memory it has available.
+SMALL_RUN = 2**26
+#: Initial angles larger than this [rad] are reduced by whole turns before a run
+#: (:class:`AngleReduction`): there floats are 2e-12 rad apart, 4000 times coarser than near pi.
+REDUCE_ANGLES_BEYOND = 2.0**13
+#: Saved angles spaced more coarsely than this [rad] by the floats warn.
+ANGLE_SPACING_WARNING = 1e-8
+#: A driven model's step times rounded by more than this fraction of ``dt`` warn.
+CLOCK_ROUNDING_WARNING = 1e-6
 
 
 @dataclass(frozen=True)
@@ -183,16 +208,39 @@ def step_count(t_end: float, dt: float) -> int:
     should be whole (``0.3 / 0.1`` is ``2.9999999999999996``). This is the
     one rule every run of the package uses.
 
+    Parameters
+    ----------
+    t_end : float
+        Length of the interval [s], ``>= 0``.
+    dt : float
+        Step size [s], ``> 0``.
+
+    Raises
+    ------
+    ValueError
+        If ``t_end < 0``, ``dt <= 0``, either is not finite, or ``t_end / dt`` overflows.
+
     Examples
     --------
     >>> step_count(0.3, 0.1), step_count(1.0, 0.3)
     (3, 3)
     """
-    return int(np.floor(t_end / dt * (1 + 1e-12)))
+    t_end = check.non_negative_number("t_end", t_end)
+    dt = check.positive_number("dt", dt)
+    steps = t_end / dt * (1 + 1e-12)
+    if not math.isfinite(steps):
+        raise ValueError(f"`t_end` / `dt` = {t_end:g} / {dt:g} overflows: more steps than "
+                         "can be counted; choose a larger `dt`")
+    return int(steps)
 
 
-def time_grid(t_end, dt) -> tuple[float, float, int]:
-    """Validated ``(t_end, dt, number of steps)`` of a run; ``t_end >= dt > 0``."""
+def time_grid(t_end, dt, *, members: int = 1, allow_long_run: bool = False
+              ) -> tuple[float, float, int]:
+    """Validated ``(t_end, dt, number of steps)`` of a run; ``t_end >= dt > 0``.
+
+    A run of more than :data:`WORK_BUDGET` state updates (steps times ``members``) is refused
+    unless ``allow_long_run`` (:func:`check_run_length`).
+    """
     dt = check.positive_number("dt", dt)
     t_end = check.positive_number("t_end", t_end)
     if t_end < dt:
@@ -203,7 +251,154 @@ def time_grid(t_end, dt) -> tuple[float, float, int]:
             f"`t_end` / `dt` = {t_end:g} / {dt:g} = {n_steps:.3g} steps, more than a run can "
             f"count ({MAX_STEPS:.3g}); choose a larger `dt` or a shorter `t_end`"
         )
+    check_run_length(n_steps, members, what=f"`t_end` / `dt` = {t_end:g} s / {dt:g} s",
+                     advice="Choose a larger `dt` or a shorter `t_end`",
+                     allow_long_run=allow_long_run)
     return t_end, dt, n_steps
+
+
+def check_run_length(n_steps: int, members: int, *, what: str, advice: str,
+                     allow_long_run: bool = False, opt_in: bool = True) -> None:
+    """Refuse a run of more than :data:`WORK_BUDGET` state updates unless ``allow_long_run``.
+
+    The message gives the count and the budget: a mistyped ``dt`` (``1e-12`` for ``1e-2``)
+    or ``t_end`` would otherwise start a run of days behind a progress bar. ``what`` names
+    the arguments that make the ``n_steps`` steps, ``advice`` what to change; ``opt_in`` says
+    whether the caller offers ``allow_long_run``.
+    """
+    if not isinstance(allow_long_run, bool):
+        raise TypeError(f"`allow_long_run` must be True or False, got {allow_long_run!r}")
+    work = n_steps * members
+    if allow_long_run or work <= WORK_BUDGET:
+        return
+    runs = "" if members == 1 else f" x {members} trajectories = {work:.3g} state updates"
+    raise ValueError(
+        f"{what} = {n_steps:.3g} steps{runs}, more than the budget of {WORK_BUDGET:.0e} state "
+        f"updates for one run (at about a microsecond each, {work * 1e-6 / 3600:.3g} hours). "
+        f"{advice}"
+        + ("; to run it anyway, pass allow_long_run=True (to simulate or simulate_segments)."
+           if opt_in else ".")
+    )
+
+
+def check_clock(model: PendulumModel, t0: float, span: float, dt: float,
+                stacklevel: int = 3) -> None:
+    """Refuse times so large that ``t + dt == t``; warn where a driven model's times round.
+
+    Floats near ``t`` are ``np.spacing(t)`` apart. Once that exceeds twice ``|dt|`` the clock
+    of the run stands still (every step starts at the same time), which would leave a driven
+    model's drive frozen and every model's saved times equal. Short of that, a driven model's
+    drive is evaluated at rounded times: a ``RuntimeWarning`` says by how much when the
+    rounding exceeds :data:`CLOCK_ROUNDING_WARNING` of a step.
+    """
+    last = max(abs(t0), abs(t0 + span))
+    spacing = math.ulp(last)
+    if last + abs(dt) != last and spacing <= CLOCK_ROUNDING_WARNING * abs(dt):
+        return  # the usual case, decided without asking the model
+    driven = not model.is_autonomous
+    if last + abs(dt) == last or (driven and spacing > CLOCK_ROUNDING_WARNING * abs(dt)):
+        period = model.drive_period
+        if not driven:
+            remedy = ("This model does not depend on the time, so t0 only labels the saved "
+                      "times: start at t0 = 0 for the same motion.")
+        elif np.ndim(period) == 0:
+            remedy = (f"The drive repeats every {period:.6g} s: start at t0 % {period:.6g} = "
+                      f"{math.fmod(t0, period):.6g} s for about the same drive phase.")
+        else:  # a family's periods
+            remedy = ("The drive repeats with its period 2 pi / drive_frequency: start at t0 "
+                      "modulo it for about the same drive phase.")
+    # the argument that makes the times large
+    where = f"`t0` = {t0:g} s" if abs(t0) >= abs(span) else f"`t0` + `t_end` = {t0 + span:g} s"
+    if last + abs(dt) == last:
+        raise ValueError(
+            f"{where}: floats near t = {last:.3g} s are {spacing:.3g} s apart, more "
+            f"than twice `dt` = {abs(dt):g} s, so t + dt == t and the clock of the run would "
+            f"stand still. {remedy}"
+        )
+    if driven and spacing > CLOCK_ROUNDING_WARNING * abs(dt):
+        warnings.warn(
+            f"{where}: floats near t = {last:.3g} s are {spacing:.3g} s apart, "
+            f"{spacing / abs(dt):.2g} of `dt`, so the drive is evaluated at times rounded by "
+            f"up to that much. {remedy}",
+            RuntimeWarning,
+            stacklevel=stacklevel,
+        )
+
+
+@dataclass(frozen=True)
+class AngleReduction:
+    """Initial angles reduced by whole turns, and the way back to the angles given.
+
+    Every model of the package is 2 pi-periodic in each absolute angle: its Hamiltonian
+    depends on them through ``cos theta_i`` (gravity) and ``cos(theta_i - theta_j)`` (the rods'
+    coupling), the damping torques on the angular velocities, the drive on the time. So the run
+    from ``theta0 + 2 pi k`` is the run from ``theta0`` with every angle shifted by ``2 pi k``,
+    in canonical variables and in the velocity variables of ``*_velocity`` methods alike (a
+    whole turn changes neither ``omega`` nor ``p = M(theta) omega``). What is not periodic in the
+    angles is what a caller computes from them as numbers (an angle plotted against time, a
+    crossing of ``theta = 0`` rather than of ``0 mod 2 pi``): hence the angles given back. The
+    drive is periodic in ``t``, but that is no reason to reduce the time, whose saved values
+    must stay the caller's: a huge ``t0`` is refused or warned about instead (:func:`check_clock`).
+
+    Far from zero, floats are spaced too widely for the small changes of a step (1e15 rad: 0.125
+    rad apart, and a run there made relative energy errors of 1e3). So angles beyond
+    :data:`REDUCE_ANGLES_BEYOND` are reduced exactly (:func:`~pendulum_lab.model.reduce_turns`)
+    and the run steps from there; the saved angles are given back as ``theta0 + (theta -
+    reduced)``: they start at the ``theta0`` given and are continuous (never wrapped), and the
+    energies, velocities and momenta are computed from the reduced angles, where they are
+    accurate.
+
+    Attributes
+    ----------
+    given, reduced : ndarray, shape (K, n)
+        The initial angles as given (flattened) and reduced; equal where not reduced.
+    mask : ndarray of bool, shape (K, n)
+        The entries reduced.
+    """
+
+    given: np.ndarray
+    reduced: np.ndarray
+    mask: np.ndarray
+
+    @classmethod
+    def of(cls, theta: np.ndarray, stacklevel: int = 3) -> AngleReduction | None:
+        """The reduction of the angles ``theta`` (shape ``(K, n)``), or None if none is needed.
+
+        Warns where the angles given are so large that floats there are spaced more than
+        :data:`ANGLE_SPACING_WARNING` apart: the saved angles are rounded to that spacing.
+        """
+        mask = np.abs(theta) > REDUCE_ANGLES_BEYOND
+        if not mask.any():
+            return None
+        largest = float(np.max(np.abs(theta)))
+        spacing = float(np.spacing(largest))
+        if spacing > ANGLE_SPACING_WARNING:
+            warnings.warn(
+                f"`theta0` holds angles up to {largest:.3g} rad, where floats are {spacing:.3g}"
+                " rad apart: the saved angles (theta0 plus the motion) are rounded to that. The "
+                "run itself, and its energies, velocities and momenta, use the angles reduced "
+                "by whole turns (the model is 2 pi-periodic in each angle); start from "
+                "pendulum_lab.model.reduce_turns(theta0) to see the motion in the angles.",
+                RuntimeWarning,
+                stacklevel=stacklevel,
+            )
+        reduced = np.where(mask, reduce_turns(np.where(mask, theta, 0.0)), theta)
+        return cls(theta.copy(), reduced, mask)
+
+    def restore(self, theta: np.ndarray) -> np.ndarray:
+        """Angles ``theta`` of the reduced run (shape ``(..., K, n)``) as continued from those
+        given."""
+        return np.where(self.mask, self.given + (theta - self.reduced), theta)
+
+    def select(self, rows) -> AngleReduction:
+        """The reduction of some members (rows) only."""
+        return AngleReduction(self.given[rows], self.reduced[rows], self.mask[rows])
+
+    def restored(self, traj: Trajectory, batch_shape: tuple) -> Trajectory:
+        """``traj`` (of the reduced run, ensemble ``batch_shape``) with the angles restored."""
+        n = traj.theta.shape[-1]
+        flat = traj.theta.reshape(len(traj.t), -1, n)
+        return dataclasses.replace(traj, theta=self.restore(flat).reshape(traj.theta.shape))
 
 
 def initial_state(model: PendulumModel, theta0, omega0, p0) -> tuple[np.ndarray, np.ndarray]:
@@ -214,11 +409,19 @@ def initial_state(model: PendulumModel, theta0, omega0, p0) -> tuple[np.ndarray,
     name, start = ("omega0", omega0) if p0 is None else ("p0", p0)
     start = check.state_array(name, start, model.n)
     check.same_shape("theta0", theta0, name, start)
+    if theta0.size == 0:
+        raise ValueError(f"`theta0` must hold at least one state, got shape {theta0.shape} "
+                         "(an empty ensemble)")
     return theta0, start
 
 
-def run_arguments(model, theta0, omega0, p0, t_end, dt, method, save_every, t0):
+def run_arguments(model, theta0, omega0, p0, t_end, dt, method, save_every, t0,
+                  allow_long_run: bool = False):
     """The arguments of a run, validated in the order :func:`simulate` names them.
+
+    Also refuses, before any work: a run beyond :data:`WORK_BUDGET` unless ``allow_long_run``
+    (:func:`check_run_length`), a ``save_every`` longer than the run, and a clock that would
+    stand still (:func:`check_clock`).
 
     Returns
     -------
@@ -232,9 +435,17 @@ def run_arguments(model, theta0, omega0, p0, t_end, dt, method, save_every, t0):
     require_model(model)
     method = get_method(method)
     theta0, start = initial_state(model, theta0, omega0, p0)
-    grid = time_grid(t_end, dt)
+    grid = time_grid(t_end, dt, members=theta0.size // model.n, allow_long_run=allow_long_run)
     save_every = check.integer_at_least("save_every", save_every, 1)
-    return method, theta0, start, grid, save_every, check.real_number("t0", t0)
+    if save_every > grid[2]:
+        raise ValueError(
+            f"`save_every` = {save_every} is more than the run's {grid[2]} steps (`t_end` / "
+            f"`dt` = {grid[0]:g} / {grid[1]:g}), so only the initial state would be kept; "
+            f"choose `save_every` <= {grid[2]} or a longer `t_end`"
+        )
+    t0 = check.real_number("t0", t0)
+    check_clock(model, t0, grid[0], grid[1], stacklevel=4)
+    return method, theta0, start, grid, save_every, t0
 
 
 def canonical_state(model: PendulumModel, theta0, omega0=None, p0=None):
@@ -322,17 +533,32 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     if dt == 0:
         raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
     t0 = check.real_number("t0", t0)
+    check_clock(model, t0, dt, dt)
     shape = theta0.shape
+    members = theta0.size // model.n
+    check_memory(memory_needed(model.n, method, members, 1), "one step of "
+                 + ("1 state" if members == 1 else f"{members} states"),
+                 "Step fewer states at a time.")
     row_models = model.for_ensemble(shape[:-1])
     field = hamiltonian_field(row_models)
     check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
+    reduction = AngleReduction.of(q)
+    if reduction is not None:
+        q = reduction.reduced.copy()
     y = start.reshape(-1, model.n)
     y = to_method_variables(row_models, method, q, y, given_momenta=p0 is not None)
     compile_method(method, field, model.n).step_rows(q, y, dt, f"dt = {dt:g}", t0=t0)
     if method.variables == "velocity":
-        y = row_models.momenta(q, y)
+        with np.errstate(over="ignore", invalid="ignore"):  # a non-finite step, warned below
+            y = row_models.momenta(q, y)
+    if not (np.isfinite(q).all() and np.isfinite(y).all()):
+        bad = ~(np.isfinite(q).all(axis=-1) & np.isfinite(y).all(axis=-1))
+        warn_not_finite(method, 1, t0 + dt, int(bad.sum()), members,
+                        "the step returns it as computed.")
+    if reduction is not None:
+        q = reduction.restore(q)
     return q.reshape(shape), y.reshape(shape)
 
 
@@ -361,21 +587,49 @@ def progress_bar(total: int, work: int, enabled: bool | None, label: str, unit: 
     return tqdm(total=total, desc=label, unit=unit, mininterval=0.5)
 
 
-def _check_memory(n_saved: int, members: int, n: int, t_end: float, dt: float, n_steps: int,
-                  save_every: int) -> None:
-    """Refuse a run whose kept states cannot fit in this machine's memory."""
+def memory_needed(n: int, method: Method, members: int, n_saved: int) -> float:
+    """Bytes a run of ``members`` trajectories of ``n`` links keeping ``n_saved`` states each
+    holds at its peak: the kept states and their conversions, the method's working memory
+    (``method.kernel.memory(n)`` floats per trajectory) and the state being stepped.
+
+    Measured peaks (tracemalloc) stay below it; see :data:`FLOATS_PER_STATE`.
+    """
+    per_member = (max(1, method.kernel.memory(n)) + FLOATS_PER_MEMBER[0] * n
+                  + FLOATS_PER_MEMBER[1])
     per_state = FLOATS_PER_STATE[0] * n + FLOATS_PER_STATE[1]
-    needed = 8.0 * n_saved * members * per_state
-    available = check.physical_memory()
+    return 8.0 * members * (n_saved * per_state + per_member)
+
+
+def check_memory(needed: float, what: str, advice: str) -> None:
+    """Refuse, before any work, ``what`` (a run) needing ``needed`` bytes if this machine does
+    not have them available now; ``advice`` says which arguments to change.
+
+    Runs below :data:`SMALL_RUN` bytes pass unasked: asking the system costs 0.1 ms, as much
+    as a short run.
+    """
+    if needed < SMALL_RUN:
+        return
+    available = check.available_memory()
     if available is None or needed <= available:
         return
-    runs = "1 trajectory" if members == 1 else f"{members} trajectories"
     raise ValueError(
-        f"`t_end` = {t_end:g} s with `dt` = {dt:g} s is {n_steps:.3g} steps; with "
-        f"`save_every` = {save_every}, keeping {n_saved:.3g} states of {runs} needs at least "
-        f"{check.bytes_text(needed)} of memory, more than this machine's "
-        f"{check.bytes_text(available)}. Raise `save_every`, pass keep='final' (the final "
-        "state only), or choose a shorter `t_end` or a larger `dt`."
+        f"{what} needs about {check.bytes_text(needed)} of memory, more than the "
+        f"{check.bytes_text(available)} this machine has available. {advice}"
+    )
+
+
+def warn_not_finite(method: Method, first_bad: int, t: float, count: int, members: int,
+                    what_follows: str, stacklevel: int = 3) -> None:
+    """The one warning of a state that became non-finite (:func:`simulate` and :func:`step`).
+
+    Neither raises: the states computed are returned, and the warning says where the first
+    non-finite one appeared and what the result holds from there.
+    """
+    warnings.warn(
+        f"{method.name}: the state became non-finite at step {first_bad} (t = {t:.6g}) in "
+        f"{count} of {members} trajectories; {what_follows} Try a smaller dt.",
+        RuntimeWarning,
+        stacklevel=stacklevel,
     )
 
 
@@ -392,6 +646,7 @@ def simulate(
     t0: float = 0.0,
     keep: str = "all",
     progress: bool | None = None,
+    allow_long_run: bool = False,
 ) -> Trajectory:
     """Integrate the pendulum from ``(theta0, omega0)`` over ``[t0, t0 + t_end]``.
 
@@ -428,6 +683,10 @@ def simulate(
         the final state only (an ensemble's end points, in little memory).
     progress : bool, optional
         Show a progress bar; by default only for long runs.
+    allow_long_run : bool
+        Run even beyond :data:`WORK_BUDGET` state updates (steps times
+        trajectories, hours of computing), which is otherwise refused before it
+        starts.
 
     Returns
     -------
@@ -439,9 +698,18 @@ def simulate(
         If an implicit method's equations do not converge; the message names
         the step and the time.
     ValueError
-        For invalid arguments, including a run whose kept states would not fit
-        in memory (the message names ``t_end``, ``dt``, ``save_every`` and the
-        memory needed).
+        For invalid arguments, and before any work for a run that would not fit
+        in the memory available (the message names ``t_end``, ``dt``,
+        ``save_every`` and the memory needed), one beyond the work budget
+        without ``allow_long_run``, a ``save_every`` longer than the run, or a
+        ``t0`` so large that ``t0 + dt == t0``.
+
+    Warns
+    -----
+    RuntimeWarning
+        If the state becomes non-finite (see Notes); if a driven model's step
+        times round by more than a millionth of ``dt`` (a huge ``t0``); if
+        ``theta0`` is so large that the saved angles round by more than 1e-8 rad.
 
     Notes
     -----
@@ -449,6 +717,11 @@ def simulate(
     trajectory then stops at the first non-finite state with a
     ``RuntimeWarning`` and returns what it computed, with ``completed=False``;
     in an ensemble the other members go on and the blown-up one holds NaN.
+    :func:`step` warns in the same words and returns the non-finite state.
+
+    Initial angles beyond :data:`REDUCE_ANGLES_BEYOND` rad are reduced by whole
+    turns before stepping (:class:`AngleReduction`); the saved angles start at
+    ``theta0`` and are continuous, and the energies are computed accurately.
     Ensemble members are integrated in parallel threads. For runs processed
     piece by piece (every step needed, too many to keep), see
     :func:`pendulum_lab.simulate_segments`.
@@ -461,7 +734,7 @@ def simulate(
     (11, 1)
     """
     method, theta0, start, (t_end, dt, n_steps), save_every, t0 = run_arguments(
-        model, theta0, omega0, p0, t_end, dt, method, save_every, t0
+        model, theta0, omega0, p0, t_end, dt, method, save_every, t0, allow_long_run
     )
     compiled_before = compile_seconds()
     if check.choice("keep", keep, ("all", "final")) == "final":
@@ -469,20 +742,42 @@ def simulate(
             raise ValueError("give `save_every` only with keep='all' (keep='final' keeps the "
                              "initial and the final state)")
         save_every = n_steps
+    progress = check_progress(progress)
     batch_shape = theta0.shape[:-1]
+    members = theta0.size // model.n
+    n_saved = n_steps // save_every + 1
+    runs = "1 trajectory" if members == 1 else f"{members} trajectories"
+    check_memory(memory_needed(model.n, method, members, n_saved),
+                 f"`t_end` = {t_end:g} s with `dt` = {dt:g} s is {n_steps:.3g} steps; with "
+                 f"`save_every` = {save_every}, keeping {n_saved:.3g} states of {runs}",
+                 "Raise `save_every`, pass keep='final' (the final state only), or choose a "
+                 "shorter `t_end` or a larger `dt`" + (" or fewer initial states." if members > 1
+                                                       else "."))
     # One model per row of the run (a family's members get their own parameters).
     row_models = model.for_ensemble(batch_shape)
     field = hamiltonian_field(row_models)
     check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
+    reduction = AngleReduction.of(q)
+    if reduction is not None:
+        q = reduction.reduced.copy()
     y = to_method_variables(row_models, method, q, start.reshape(-1, model.n),
                              given_momenta=p0 is not None)
     compiled = compile_method(method, field, model.n)
     compile_time = compile_seconds() - compiled_before
-    trajectory = integrate(model, compiled, q, y, theta0.shape[:-1], t_end=t_end, dt=dt,
-                           n_steps=n_steps, save_every=save_every, t0=t0, progress=progress)
-    return dataclasses.replace(trajectory, compile_time=compile_time)
+    traj = integrate(model, compiled, q, y, batch_shape, t_end=t_end, dt=dt, n_steps=n_steps,
+                     save_every=save_every, t0=t0, progress=progress)
+    traj = dataclasses.replace(traj, compile_time=compile_time)
+    return traj if reduction is None else reduction.restored(traj, batch_shape)
+
+
+def check_progress(progress) -> bool | None:
+    """``progress`` if it is True, False or None (decide by the length of the run)."""
+    if progress is not None and not isinstance(progress, (bool, np.bool_)):
+        raise TypeError(f"`progress` must be True, False or None (by the run's length), got "
+                        f"{progress!r}")
+    return None if progress is None else bool(progress)
 
 
 def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape: tuple, *,
@@ -496,16 +791,25 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     ``memory`` (shape ``(K, S)``, :meth:`~pendulum_lab.driver.loops.CompiledMethod.new_memory`,
     updated in place) is what the method carries from step to step; a fresh one by default.
     Passing the memory of the previous call continues that run exactly
-    (:func:`pendulum_lab.simulate_segments` does).
+    (:func:`pendulum_lab.simulate_segments` does). The callers have checked the memory needed
+    (:func:`check_memory`), before any work.
     """
     method = compiled.method
     n_saved = n_steps // save_every + 1
     members = q.shape[0]
-    _check_memory(n_saved, members, model.n, t_end, dt, n_steps, save_every)
-    if memory is None:
-        memory = compiled.new_memory(members)
-    saved_q = np.full((members, n_saved, model.n), np.nan)
-    saved_y = np.full((members, n_saved, model.n), np.nan)
+    try:
+        if memory is None:
+            memory = compiled.new_memory(members)
+        saved_q = np.full((members, n_saved, model.n), np.nan)
+        saved_y = np.full((members, n_saved, model.n), np.nan)
+    except MemoryError:  # the callers check first; memory may still run out in the meantime
+        raise MemoryError(
+            f"keeping {n_saved:.3g} states of {members} trajectories ({model.n} links, "
+            f"{method.name}) needs about "
+            f"{check.bytes_text(memory_needed(model.n, method, members, n_saved))} of memory, "
+            "which this machine no longer has available; raise `save_every` or run fewer "
+            "trajectories"
+        ) from None
     saved_q[:, 0], saved_y[:, 0] = q, y
     stats = np.zeros((members, 4), dtype=np.int64)
 
@@ -542,15 +846,9 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     kept = n_saved
     if not completed:
         first_bad = int(np.min(stats[blown, STEPS])) + 1
-        warnings.warn(
-            f"{method.name}: the state became non-finite at step {first_bad} "
-            f"(t = {t0 + first_bad * dt:.6g}) in {int(blown.sum())} of {members} trajectories; "
-            + ("the trajectory stops there. " if not batch_shape
-               else "those trajectories hold NaN from there on. ")
-            + "Try a smaller dt.",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+        warn_not_finite(method, first_bad, t0 + first_bad * dt, int(blown.sum()), members,
+                        "the trajectory stops there." if not batch_shape
+                        else "those trajectories hold NaN from there on.", stacklevel=4)
         if not batch_shape:
             kept = int(stats[0, STEPS]) // save_every + 1
 

@@ -5,7 +5,7 @@ in some numbers), the factories and the checks of a model argument; ``numeric`` 
 of a chain (lambdified, or looped for long chains); ``angles`` the wrapping of angles.
 """
 
-from .angles import wrap_angle
+from .angles import reduce_turns, wrap_angle
 from .pendulum import (
     FAMILY_PARAMETERS,
     ModelFamily,
@@ -25,6 +25,7 @@ __all__ = [
     "double_pendulum",
     "driven_pendulum",
     "n_pendulum",
+    "reduce_turns",
     "require_double_pendulum",
     "require_model",
     "simple_pendulum",

@@ -65,6 +65,43 @@ MAX_LINKS_REASON = (
     "1000 links, where the linear-time solve already loses 5e-12 against a dense one) and its "
     "fastest normal mode like sqrt(n) (about 200 rad/s at 1000 unit links), so the steps an "
     "integrator needs shrink with n")
+#: The range of every number of a model (masses, lengths, and the size of g, the damping and
+#: the drive), and why.
+PARAMETER_RANGE = (1e-9, 1e9)
+PARAMETER_RANGE_REASON = (
+    "the compiled kernels divide by products such as m l^2 and l1 l2 m2, which must stay far "
+    "inside the range of double precision (length = 1e-300 gives m l^2 = 0, a division by "
+    "zero); choose units in which the numbers lie in [1e-9, 1e9]")
+
+
+def _links(n) -> int:
+    """The number of links ``n``, checked before anything is built for it."""
+    n = check.integer_at_least("n", n, 1)
+    if n > MAX_LINKS:
+        shown = n if n < 10**6 else format(n, ".3g")
+        raise ValueError(f"`n` must be at most {MAX_LINKS} links, got {shown}: "
+                         f"{MAX_LINKS_REASON}")
+    return n
+
+
+def _in_range(name: str, values, positive: bool) -> np.ndarray:
+    """``values`` (a number or an array, validated finite) checked against PARAMETER_RANGE:
+    ``low <= value <= high`` if ``positive``, else ``|value| <= high``."""
+    low, high = PARAMETER_RANGE
+    array = np.asarray(values, dtype=float)
+    bad = (array < low) | (array > high) if positive else np.abs(array) > high
+    if np.any(bad):
+        first = float(array[bad].flat[0]) if array.ndim else float(array)
+        accepted = f"in [{low:g}, {high:g}]" if positive else f"of size at most {high:g}"
+        raise ValueError(f"`{name}` must be {accepted}, got {first:g}: {PARAMETER_RANGE_REASON}")
+    return array
+
+
+def _size(name: str, value, positive: bool = True) -> float:
+    """A model's number, finite and (positive and) within PARAMETER_RANGE."""
+    value = check.positive_number(name, value) if positive else check.real_number(name, value)
+    _in_range(name, value, positive)
+    return value
 
 
 class PendulumModel:
@@ -106,17 +143,19 @@ class PendulumModel:
 
     def __init__(self, n: int, masses, lengths, g: float, *, damping=0.0,
                  drive_amplitude: float = 0.0, drive_frequency: float | None = None):
-        self.n = check.integer_at_least("n", n, 1)
-        if self.n > MAX_LINKS:
-            raise ValueError(f"`n` must be at most {MAX_LINKS} links, got {self.n}: "
-                             f"{MAX_LINKS_REASON}")
+        self.n = _links(n)
         self.masses = check.positive_vector("masses", masses, self.n)
         self.lengths = check.positive_vector("lengths", lengths, self.n)
-        self.g = check.real_number("g", g)
+        for name, values in (("masses", self.masses), ("lengths", self.lengths)):
+            for i, value in enumerate(values):
+                _in_range(f"{name}[{i}]", value, positive=True)
+        self.g = _size("g", g, positive=False)
         self.damping = check.nonnegative_vector("damping", damping, self.n)
-        self.drive_amplitude = check.real_number("drive_amplitude", drive_amplitude)
+        for i, value in enumerate(self.damping):
+            _in_range("damping" if self.n == 1 else f"damping[{i}]", value, positive=False)
+        self.drive_amplitude = _size("drive_amplitude", drive_amplitude, positive=False)
         self.drive_frequency = (None if drive_frequency is None
-                                else check.positive_number("drive_frequency", drive_frequency))
+                                else _size("drive_frequency", drive_frequency))
         if self.drive_amplitude != 0 and self.drive_frequency is None:
             raise ValueError("`drive_frequency` must be given (> 0) when `drive_amplitude` != 0")
         self.forced = not (self.is_conservative and self.is_autonomous)
@@ -271,9 +310,21 @@ class PendulumModel:
             raise ValueError("`t` must be finite")
         return t
 
+    def _states(self, name: str, value) -> np.ndarray:
+        """``value`` as floats of shape ``(..., n)``, or an error naming ``name``."""
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(f"`{name}` must be an array of real numbers of shape (..., "
+                            f"{self.n})") from None
+        if array.ndim == 0 or array.shape[-1] != self.n:
+            raise ValueError(f"`{name}` must have shape (..., {self.n}) for a model with "
+                             f"{self.n} link(s), got shape {array.shape}")
+        return array
+
     def mass_matrix_at(self, theta) -> np.ndarray:
         """``M(theta)``, shape ``(..., n, n)``."""
-        return self._fn.mass_matrix(theta, self._params)
+        return self._fn.mass_matrix(self._states("theta", theta), self._params)
 
     def accelerations(self, theta, omega, t=None) -> np.ndarray:
         """``omega' = M(theta)^-1 (F(theta, omega) + Q(omega, t))``, shape ``(..., n)``.
@@ -281,11 +332,14 @@ class PendulumModel:
         ``t`` (a float, or an array of the batch shape ``...``) is needed for a
         driven model only.
         """
-        return self._fn.accelerations(theta, omega, self._params, self._time(t))
+        return self._fn.accelerations(self._states("theta", theta),
+                                      self._states("omega", omega), self._params, self._time(t))
 
     def generalized_forces(self, theta, omega, t=None) -> np.ndarray:
         """``Q(omega, t)``: joint damping and drive torques, shape ``(..., n)``; 0 if unforced."""
-        return self._fn.generalized_forces(theta, omega, self._params, self._time(t))
+        return self._fn.generalized_forces(self._states("theta", theta),
+                                           self._states("omega", omega), self._params,
+                                           self._time(t))
 
     def vector_field(self, theta, p, t=None) -> tuple[np.ndarray, np.ndarray]:
         """``(dtheta/dt, dp/dt) = (dH/dp, -dH/dq + Q)`` in canonical variables, each ``(..., n)``.
@@ -293,24 +347,28 @@ class PendulumModel:
         The right-hand side every integrator integrates (the compiled kernels
         compute the same). ``t`` is needed for a driven model only.
         """
+        theta = self._states("theta", theta)
         omega = self.velocities(theta, p)
         return omega, (self._fn.dlagrangian_dq(theta, omega, self._params)
                        + self._fn.generalized_forces(theta, omega, self._params, self._time(t)))
 
     def momenta(self, theta, omega) -> np.ndarray:
         """``p = M(theta) omega``."""
-        return self._fn.momenta(theta, omega, self._params)
+        return self._fn.momenta(self._states("theta", theta), self._states("omega", omega),
+                                self._params)
 
     def velocities(self, theta, p) -> np.ndarray:
         """``omega = M(theta)^-1 p`` (this is ``dH/dp``)."""
-        return self._fn.velocities(theta, p, self._params)
+        return self._fn.velocities(self._states("theta", theta), self._states("p", p),
+                                   self._params)
 
     def kinetic_energy(self, theta, omega) -> np.ndarray:
-        return self._fn.kinetic(theta, omega, self._params)
+        return self._fn.kinetic(self._states("theta", theta), self._states("omega", omega),
+                                self._params)
 
     def potential_energy(self, theta) -> np.ndarray:
         """Potential energy, zero at the pivot's height."""
-        return self._fn.potential(theta, self._params)
+        return self._fn.potential(self._states("theta", theta), self._params)
 
     def energy(self, theta, omega) -> np.ndarray:
         return self.kinetic_energy(theta, omega) + self.potential_energy(theta)
@@ -323,6 +381,7 @@ class PendulumModel:
         return self.velocities(theta, p)
 
     def dH_dq(self, theta, p) -> np.ndarray:
+        theta = self._states("theta", theta)
         return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p), self._params)
 
     def hamiltonian_value(self, theta, p) -> np.ndarray:
@@ -338,9 +397,9 @@ class PendulumModel:
         ``-C`` to ``d(dp/dt)/d omega``; the drive depends on ``t`` only.
         """
         self._time(t)  # a driven model's field depends on t (its Jacobian does not)
-        theta = np.asarray(theta, float)
+        theta = self._states("theta", theta)
         mass = self.mass_matrix_at(theta)
-        omega = solve_small(mass, np.asarray(p, float))
+        omega = solve_small(mass, self._states("p", p))
         args = (theta, omega, self._params)
         inv_mass = np.linalg.inv(mass)
         dw_dq = -inv_mass @ self._fn.dmomenta_dq(*args)
@@ -353,7 +412,7 @@ class PendulumModel:
 
     def positions(self, theta) -> tuple[np.ndarray, np.ndarray]:
         """Cartesian bob positions ``(x, y)``, each shape ``(..., n)``, pivot at the origin."""
-        theta = np.asarray(theta, float)
+        theta = self._states("theta", theta)
         lengths = np.stack(np.broadcast_arrays(*self.lengths), axis=-1)
         return (np.cumsum(lengths * np.sin(theta), axis=-1),
                 -np.cumsum(lengths * np.cos(theta), axis=-1))
@@ -413,13 +472,32 @@ class ModelFamily(PendulumModel):
             raise ValueError(f"the arrays of values must broadcast together, got "
                              f"{shapes}") from None
         arrays = {k: np.broadcast_to(a, shape) for k, a in arrays.items()}
-        # Each member is a model of its own: the factories' checks apply to every value.
-        members = [base.replace(**{k: float(a[index]) for k, a in arrays.items()})
-                   for index in np.ndindex(shape)]
-        forced = any(m.forced for m in members)
-        rows = np.array([m._parameters(forced) for m in members], dtype=float)
-        self._setup(base, arrays, forced, tuple(rows.T.reshape(-1, *shape)),
-                    has_frequency=all(m.drive_frequency is not None for m in members))
+        # Each member is a model of its own: the constructor's checks, on whole arrays (a
+        # million members are checked at once, not built one by one).
+        value = {name: arrays.get(name, getattr(base, name)) for name in FAMILY_PARAMETERS}
+        for name, array in arrays.items():
+            if name == "damping" and np.any(array < 0):
+                raise ValueError(f"`damping` must be non-negative (>= 0), got "
+                                 f"{array[array < 0].flat[0]}")
+            if name == "drive_frequency" and np.any(array <= 0):
+                raise ValueError(f"`drive_frequency` must be a positive number (> 0), got "
+                                 f"{array[array <= 0].flat[0]}")
+            _in_range(name, array, positive=name == "drive_frequency")
+        has_frequency = value["drive_frequency"] is not None
+        if not has_frequency and np.any(np.asarray(value["drive_amplitude"]) != 0):
+            raise ValueError("`drive_frequency` must be given (> 0) when `drive_amplitude` != 0")
+        # A varied damping is the same for every joint of a member (as `replace` sets it).
+        damping = ((arrays["damping"],) * base.n if "damping" in arrays
+                   else base.damping)
+        forced = (any(np.any(np.asarray(c) != 0) for c in damping)
+                  or bool(np.any(np.asarray(value["drive_amplitude"]) != 0)))
+        params = (*base.masses, *base.lengths, value["g"])
+        if forced:
+            params += (*damping, value["drive_amplitude"],
+                       0.0 if value["drive_frequency"] is None else value["drive_frequency"])
+        self._setup(base, arrays, forced,
+                    tuple(np.array(np.broadcast_to(p, shape), dtype=float) for p in params),
+                    has_frequency=has_frequency)
 
     def _setup(self, base, values, forced, params, has_frequency):
         self.base, self.n, self.forced = base, base.n, forced
@@ -471,7 +549,9 @@ class ModelFamily(PendulumModel):
     def drive_frequency(self) -> np.ndarray | None:
         if not self._has_frequency:
             return None
-        if not self.forced:
+        if not self.forced:  # the frequencies are not among the parameters of the equations
+            if "drive_frequency" in self.values:
+                return self.values["drive_frequency"]
             return np.broadcast_to(float(self.base.drive_frequency), self.shape)
         return self._params[3 * self.n + 2]
 
@@ -526,8 +606,7 @@ def simple_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> 
     >>> float(sp_.accelerations([np.pi / 2], [0.0])[0])
     -4.905
     """
-    return PendulumModel(1, (check.positive_number("mass", mass),),
-                         (check.positive_number("length", length),), g)
+    return PendulumModel(1, (_size("mass", mass),), (_size("length", length),), g)
 
 
 def driven_pendulum(damping: float = 0.5, drive_amplitude: float = 1.2,
@@ -565,9 +644,9 @@ def driven_pendulum(damping: float = 0.5, drive_amplitude: float = 1.2,
     >>> float(model.accelerations([0.0], [0.0], t=0.0)[0])  # the drive alone at t = 0
     1.2
     """
-    return PendulumModel(1, (check.positive_number("mass", mass),),
-                         (check.positive_number("length", length),), g, damping=damping,
-                         drive_amplitude=drive_amplitude, drive_frequency=drive_frequency)
+    return PendulumModel(1, (_size("mass", mass),), (_size("length", length),), g,
+                         damping=damping, drive_amplitude=drive_amplitude,
+                         drive_frequency=drive_frequency)
 
 
 def double_pendulum(m1: float = 1.0, m2: float = 1.0, l1: float = 1.0, l2: float = 1.0,
@@ -579,8 +658,8 @@ def double_pendulum(m1: float = 1.0, m2: float = 1.0, l1: float = 1.0, l2: float
     ``drive_amplitude`` and ``drive_frequency`` add joint damping and a drive
     torque at the pivot; see :class:`PendulumModel`.
     """
-    masses = (check.positive_number("m1", m1), check.positive_number("m2", m2))
-    lengths = (check.positive_number("l1", l1), check.positive_number("l2", l2))
+    masses = (_size("m1", m1), _size("m2", m2))
+    lengths = (_size("l1", l1), _size("l2", l2))
     return PendulumModel(2, masses, lengths, g, damping=damping, drive_amplitude=drive_amplitude,
                          drive_frequency=drive_frequency)
 
@@ -593,7 +672,7 @@ def n_pendulum(n: int, masses=None, lengths=None, g: float = 9.81, *, damping=0.
     ``damping``, ``drive_amplitude`` and ``drive_frequency`` as for
     :class:`PendulumModel`.
     """
-    n = check.integer_at_least("n", n, 1)
+    n = _links(n)  # before the default masses and lengths are made for it
     return PendulumModel(n, (1.0,) * n if masses is None else masses,
                          (1.0,) * n if lengths is None else lengths, g, damping=damping,
                          drive_amplitude=drive_amplitude, drive_frequency=drive_frequency)

@@ -38,6 +38,7 @@ __all__ = [
     "check_run",
     "encode_frame",
     "export_scene",
+    "frame_count",
     "frame_indices",
     "scene_runs",
     "still_frame",
@@ -119,7 +120,15 @@ def scene_runs(traj, labels=None) -> tuple[tuple[Trajectory, ...], list[str]]:
     return runs, labels
 
 
-def frame_indices(traj: Trajectory, fps: float, speed: float) -> np.ndarray:
+def frame_count(traj: Trajectory, fps: float, speed: float) -> int:
+    """The number of frames of :func:`frame_indices`, counted without making them."""
+    fps = check.positive_number("fps", fps)
+    speed = check.positive_number("speed", speed)
+    return step_count(traj.t[-1] - traj.t[0], speed / fps) + 1
+
+
+def frame_indices(traj: Trajectory, fps: float, speed: float,
+                  limit: int | None = None) -> np.ndarray:
     """Indices into ``traj`` of the frames of an animation.
 
     Frame ``k`` shows time ``k * speed / fps`` (``speed`` simulated seconds per
@@ -133,6 +142,8 @@ def frame_indices(traj: Trajectory, fps: float, speed: float) -> np.ndarray:
         Frames per second, ``> 0``.
     speed : float
         Playback speed, ``> 0``.
+    limit : int, optional
+        Only the first ``limit`` frames (see :func:`frame_count` for all of them).
 
     Returns
     -------
@@ -145,10 +156,10 @@ def frame_indices(traj: Trajectory, fps: float, speed: float) -> np.ndarray:
     >>> frame_indices(traj, fps=10, speed=1.0)
     array([  0,  10,  20,  30,  40,  50,  60,  70,  80,  90, 100])
     """
-    fps = check.positive_number("fps", fps)
-    speed = check.positive_number("speed", speed)
+    frames = frame_count(traj, fps, speed)
+    if limit is not None:
+        frames = min(frames, check.integer_at_least("limit", limit, 1))
     spacing = traj.t[1] - traj.t[0] if len(traj.t) > 1 else 1.0
-    frames = step_count(traj.t[-1] - traj.t[0], speed / fps) + 1
     times = np.arange(frames) * (speed / fps)
     return np.minimum(np.rint(times / spacing).astype(int), len(traj.t) - 1)
 
@@ -438,6 +449,7 @@ def still_frame(
     """
     last = len(check_run(traj, model).t) - 1
     index = last if index is None else check.index_below("index", index, last + 1)
+    dpi = check.positive_number("dpi", dpi)
     figure, scene = export_scene(traj, model, trail, dpi, labels, animated=False)
     scene.show(index)
     figure.canvas.draw()
