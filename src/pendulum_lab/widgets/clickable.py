@@ -45,6 +45,7 @@ from matplotlib.figure import Figure
 
 from .. import chaos, plotting
 from .. import validation as check
+from ..driver.simulate import time_grid
 from ..model import require_model
 from ..model.pendulum import PendulumModel
 from ..plotting.png import png_bytes
@@ -496,6 +497,7 @@ def section_explorer(
             "orbit leaves its surface; chaos.poincare_section computes the crossings of such "
             "a model"
         )
+    time_grid(t_end, dt)  # the rule of every run, checked before the first click
     depth = -float(model.potential_energy(np.zeros(2)))
     energy = check.number_in("energy", energy, -depth, depth, "J", open_low=True)
     return SectionExplorer(model, energy, t_end, dt, method)
@@ -592,4 +594,5 @@ def portrait_explorer(
     model = require_model(model)
     if model.n != 1:
         raise ValueError(f"`model` must be a simple pendulum (n = 1), got n = {model.n}")
+    time_grid(t_end, dt)  # the rule of every run, checked before the first click
     return PortraitExplorer(model, t_end, dt, method)

@@ -275,6 +275,13 @@ class Instrument(WidgetWithPicture):
         unknown = [name for name in values if name not in self.controls]
         if unknown:
             raise ValueError(f"no control named {unknown}; the controls are {list(self.controls)}")
+        for name, value in values.items():  # a choice control takes one of its options only
+            options = getattr(self.controls[name], "options", None)
+            if options is not None:
+                choices = [option[1] if isinstance(option, tuple) else option
+                           for option in options]
+                if value not in choices:
+                    raise ValueError(f"`{name}` must be one of {choices}, got {value!r}")
         self._holding = True
         try:
             for name, value in values.items():
