@@ -50,6 +50,8 @@ CASES = {
                           ValueError, "would have 20000000000021 frames, more than `max_frames`"),
     "max_frames = 0": (lambda d: animation.save_animation(RUN, SP, d / "x.gif", max_frames=0),
                        ValueError, "`max_frames` must be an integer >= 1"),
+    "dpi = 20": (lambda d: animation.save_animation(RUN, SP, d / "x.gif", dpi=20), ValueError,
+                 r"`dpi` must be at least 30 .*got 20"),
     "HTML, dpi = 0": (lambda d: animation.html_animation(RUN, SP, dpi=0), ValueError, "`dpi`"),
     "HTML, fps = 1000": (lambda d: animation.html_animation(RUN, SP, fps=1000), ValueError,
                          r"`fps` must be in \(0, 60\]"),
@@ -73,9 +75,9 @@ def test_bad_input_is_refused_before_any_frame_is_drawn(case, folder):
 def test_the_valid_neighbours_are_written(folder):
     from PIL import Image
 
-    gif = animation.save_animation(RUN, SP, folder / "swing.gif", fps=50, dpi=20, seconds=0.2)
+    gif = animation.save_animation(RUN, SP, folder / "swing.gif", fps=50, dpi=30, seconds=0.2)
     assert Image.open(gif).n_frames == 10
-    assert animation.save_animation(RUN, SP, folder / "swing.gif", fps=5, dpi=20,
+    assert animation.save_animation(RUN, SP, folder / "swing.gif", fps=5, dpi=30,
                                     max_frames=6).exists()  # an existing file is replaced
     with pytest.raises(ValueError, match="would have 6 frames, more than `max_frames` = 5"):
-        animation.save_animation(RUN, SP, folder / "swing.gif", fps=5, dpi=20, max_frames=5)
+        animation.save_animation(RUN, SP, folder / "swing.gif", fps=5, dpi=30, max_frames=5)

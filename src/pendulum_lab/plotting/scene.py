@@ -29,6 +29,7 @@ from .trajectories import chain_frame
 __all__ = [
     "BOB_COLOUR",
     "EXPORT_SIZE",
+    "MIN_DPI",
     "MIN_TEXT_PIXELS",
     "TRAIL",
     "FPS",
@@ -53,6 +54,9 @@ EXPORT_SIZE = (9, 3.6)
 #: Smallest height of the exports' text [pixels of the frame]: at a low ``dpi`` the text is
 #: set larger than matplotlib's default so that it stays legible.
 MIN_TEXT_PIXELS = 11
+#: Lowest resolution of an export [dots per inch]: below it a frame of :data:`EXPORT_SIZE` has
+#: no room for its text at :data:`MIN_TEXT_PIXELS` (at 20 the layout cannot be made).
+MIN_DPI = 30
 TRAIL_COLOUR = "tab:purple"
 BOB_COLOUR = "tab:red"
 #: One colour per run when a scene overlays several (chain, trail and energies of that run).
@@ -394,7 +398,10 @@ def export_scene(
     traj, model, trail: float, dpi: float, labels=None, animated: bool = True
 ) -> tuple[Figure, PendulumScene]:
     """The drawing the exports share: a :data:`EXPORT_SIZE` figure with the runs' scene, its
-    text at least :data:`MIN_TEXT_PIXELS` high."""
+    text at least :data:`MIN_TEXT_PIXELS` high; ``dpi`` at least :data:`MIN_DPI`."""
+    if dpi < MIN_DPI:
+        raise ValueError(f"`dpi` must be at least {MIN_DPI} (a frame of {EXPORT_SIZE[0]} x "
+                         f"{EXPORT_SIZE[1]} inches has no room for its text below), got {dpi:g}")
     figure = Figure(figsize=EXPORT_SIZE, dpi=dpi)
     FigureCanvasAgg(figure)
     size = max(float(mpl.rcParams["font.size"]), MIN_TEXT_PIXELS * 72 / float(dpi))
