@@ -255,8 +255,11 @@ def make_lab_command(venv: Path, *arguments: str) -> list[str]:
     (venv / "bin").mkdir(parents=True, exist_ok=True)
     (venv / "bin" / "python").touch()
     (venv / ".installed-lab").touch()  # newer than pyproject.toml: nothing to install
-    done = subprocess.run(["make", "-n", "lab", f"VENV={venv}", *arguments], cwd=REPO,
-                          capture_output=True, text=True, timeout=60, check=True)
+    # --no-print-directory: under `make test` this make is a sub-make (MAKELEVEL > 0), which
+    # would otherwise print "Entering directory" lines around the commands.
+    done = subprocess.run(["make", "--no-print-directory", "-n", "lab", f"VENV={venv}",
+                           *arguments], cwd=REPO, capture_output=True, text=True, timeout=60,
+                          check=True)
     return done.stdout.strip().splitlines()
 
 

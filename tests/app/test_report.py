@@ -389,3 +389,15 @@ def test_compare_methods_is_the_table_of_the_report(tmp_path):
         analysis.compare_methods([dp], ["rk4"], t_end=1.0)
     with pytest.raises(ValueError, match="`methods` must be among"):
         analysis.compare_methods([(dp, [0.1, 0.1], [0.0, 0.0])], ["rk5"], t_end=1.0)
+
+
+def test_a_fit_at_round_off_gives_no_order_and_the_table_says_so():
+    # glrk16 on the simple pendulum: at the fitting steps its global error (about 1e-13) no
+    # longer shrinks, so a slope would be noise; rk4's errors shrink (negative control).
+    sp = pl.simple_pendulum()
+    rows = analysis.compare_methods([(sp, [2.0], [0.0])], ["rk4", "glrk16"], t_end=2.0).rows
+    by_method = {row.method: row for row in rows}
+    assert 3.5 < by_method["rk4"].observed_order < 4.5
+    assert np.isnan(by_method["glrk16"].observed_order)
+    table = tables.markdown_table(rows)
+    assert table.count("round-off") == 1 and "nan" not in table

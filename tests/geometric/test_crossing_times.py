@@ -1,5 +1,9 @@
 """Median first-crossing times of the standard map against K - K_c."""
 
+import subprocess
+import sys
+import textwrap
+
 import numpy as np
 import pytest
 
@@ -34,3 +38,22 @@ def test_censored_medians_are_unknown():
 def test_medians_below_greene_do_not_exist():
     phi0 = np.geomspace(1e-3, 1e-1, 8)
     assert np.all(sm.first_crossings([sm.GREENE_K - 0.02], phi0, np.zeros(8), 10**5) == -1)
+
+
+def test_the_first_call_in_a_process_says_it_prepares_the_loop_and_later_calls_do_not():
+    # A fresh process: the crossing counter has no compiled signature yet there.
+    code = textwrap.dedent("""
+        from pendulum_lab.codegen import compile_status
+        from pendulum_lab.geometric import standard_map as sm
+        seen = []
+        with compile_status.listen(seen.append):
+            sm.first_crossings([1.0], [0.1], [0.0], 10)
+            first = len(seen)
+            sm.first_crossings([1.0], [0.1], [0.0], 10)
+        print(first, len(seen), seen[0].what, seen[0].state, seen[-1].state)
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, check=True)
+    first, total, *rest = done.stdout.split()
+    assert (first, total) == ("2", "2")  # started and finished, once
+    assert "crossing counter" in " ".join(rest) and rest[-2:] == ["started", "finished"]

@@ -10,6 +10,7 @@ import pytest
 from site_harness import (
     ARTIFACTS,
     SCREENSHOTS,
+    api_pages_checked_in_light_only,
     build_site,
     crawl,
     in_ci,
@@ -48,7 +49,8 @@ def course_pages(course_site):
     if not course_site.ok:
         pytest.fail("the course site did not build; see test_site_builds", pytrace=False)
     shutil.rmtree(SCREENSHOTS, ignore_errors=True)
-    reports = crawl(course_site.output, screenshots=SCREENSHOTS)
+    reports = crawl(course_site.output, screenshots=SCREENSHOTS,
+                    first_mode_only=api_pages_checked_in_light_only(course_site.output))
     found = problems(reports, course_site.output)
     write_json(ARTIFACTS / "pages.json", {**summary(reports), "problems": found})
     return reports, found

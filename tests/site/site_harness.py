@@ -278,6 +278,14 @@ def embedded_animations(html_file: Path) -> int:
     return len(_EMBEDDED_ANIMATION.findall(html_file.read_text(encoding="utf-8", errors="replace")))
 
 
+def api_pages_checked_in_light_only(html_dir) -> tuple[str, ...]:
+    """The API reference pages but the first: text from one template, without pictures, so one
+    of them stands for all in dark mode and on screenshots (they are half of the site's pages
+    and most of its crawling time). Every page is still checked in light mode."""
+    reference = sorted(p for p in list_pages(html_dir) if p.startswith("reference/"))
+    return tuple(reference[1:])
+
+
 def _screenshot_name(page: str) -> str:
     return page.removesuffix(".html").replace("/", "__") + ".png"
 
@@ -288,8 +296,11 @@ def crawl(
     modes: tuple[str, ...] = MODES,
     screenshots: Path | None = None,
     play_animations: bool = True,
+    first_mode_only: tuple[str, ...] = (),
 ) -> list[PageReport]:
     """Open every page (or ``pages``) of the site in ``html_dir`` in Chromium, in each mode.
+
+    The pages of ``first_mode_only`` are opened in the first mode only, without a screenshot.
 
     Requests to any host other than the local server are recorded and blocked. Animations are
     played in the first mode only. Screenshots (whole page, at most 16000 px tall) go to
@@ -298,8 +309,11 @@ def crawl(
     the time goes into Chromium's rendering and screenshots, one core per browser.
     """
     pages = list_pages(html_dir) if pages is None else pages
+    skipped = set(first_mode_only)
     jobs = [
-        (html_dir, pages, mode, screenshots, play_animations and mode == modes[0]) for mode in modes
+        (html_dir, pages if mode == modes[0] else [p for p in pages if p not in skipped], mode,
+         screenshots, play_animations and mode == modes[0], skipped)
+        for mode in modes
     ]
     if len(jobs) == 1:
         return _crawl_mode(*jobs[0])
@@ -308,7 +322,7 @@ def crawl(
     return [report for result in results for report in result]
 
 
-def _crawl_mode(html_dir, pages, mode, screenshots, play) -> list[PageReport]:
+def _crawl_mode(html_dir, pages, mode, screenshots, play, unshot=()) -> list[PageReport]:
     from playwright.sync_api import sync_playwright
 
     reports = []
@@ -321,7 +335,8 @@ def _crawl_mode(html_dir, pages, mode, screenshots, play) -> list[PageReport]:
                 f"localStorage.setItem('mode', '{mode}'); localStorage.setItem('theme', '{mode}');"
             )
             for page_path in pages:
-                report = _visit(context, base, page_path, mode, screenshots, play)
+                shots = None if page_path in unshot else screenshots
+                report = _visit(context, base, page_path, mode, shots, play)
                 if play:
                     report.embedded_animations = embedded_animations(html_dir / page_path)
                 reports.append(report)

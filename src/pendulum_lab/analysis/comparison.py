@@ -9,6 +9,7 @@ report``: both call it.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -42,6 +43,7 @@ __all__ = [
     "compare_methods",
     "compare_trajectory",
     "dop853_work_precision",
+    "errors_shrink",
     "pendulum_name",
     "scipy_run",
     "work_precision",
@@ -259,7 +261,9 @@ class ComparisonRow:
     order : int
         The method's classical order.
     observed_order : float
-        Fitted slope of the global error at ``order_t_end`` against ``dt``.
+        Fitted slope of the global error at ``order_t_end`` against ``dt``; ``nan`` when the
+        errors do not shrink with the step (they are at round-off, or at the reference's
+        accuracy: there is no order to measure, and a slope would be noise).
     energy_first, energy_last : float
         Largest ``|E - E0|`` in the first and last tenth of the run
         (:func:`energy_growth`).
@@ -290,6 +294,22 @@ class ComparisonRow:
     evaluations: int
     mean_iterations: float
     completed: bool
+
+
+def errors_shrink(errors) -> bool:
+    """Whether an order fit's errors (largest step first) fell by at least a factor of 2.
+
+    Over the steps of :func:`~pendulum_lab.analysis.accuracy.order_steps` (a ratio of 2.5 or
+    more) a method of order one already divides its error by 2.5; errors that fall less are at
+    a floor (round-off, or the reference's own error), not in the asymptotic regime.
+
+    Examples
+    --------
+    >>> errors_shrink([1e-4, 1e-5, 1e-6]), errors_shrink([1.3e-13, 1.5e-13, 1.4e-13])
+    (True, False)
+    """
+    errors = np.asarray(errors, dtype=float)
+    return bool(errors.size >= 2 and errors[-1] <= 0.5 * errors[0])
 
 
 def pendulum_name(model: PendulumModel) -> str:
@@ -350,7 +370,7 @@ def compare_trajectory(model: PendulumModel, traj: Trajectory, *, order_t_end: f
         method=traj.method.name,
         variables=traj.method.variables,
         order=traj.method.order,
-        observed_order=order.slope,
+        observed_order=order.slope if errors_shrink(order.errors) else math.nan,
         energy_first=first,
         energy_last=last,
         max_relative_energy_error=float(np.max(np.abs(traj.relative_energy_error))),

@@ -45,6 +45,9 @@ def markdown_table(rows, columns=COMPARISON_COLUMNS) -> str:
             if not hasattr(row, attribute):
                 raise ValueError(f"column {header!r}: a row of type {type(row).__name__} has no "
                                  f"attribute {attribute!r}")
-            cells.append(fmt.format(getattr(row, attribute)))
+            value = getattr(row, attribute)
+            # A comparison row has no observed order where the errors sat at round-off.
+            cells.append("round-off" if attribute == "observed_order" and value != value
+                         else fmt.format(value))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

@@ -49,6 +49,7 @@ import numba
 import numpy as np
 
 from .. import validation as check
+from ..codegen.compile_status import compiling
 from ..model.pendulum import PendulumModel
 from .model_checks import simple_pendulum_model
 
@@ -211,7 +212,11 @@ def first_crossings(ks, phi0, action0, max_iterations: int) -> np.ndarray:
     if np.any(ks < 0) or not np.all(np.isfinite(ks)):
         raise ValueError("`ks` must be finite and >= 0")
     max_iterations = check.integer_at_least("max_iterations", max_iterations, 1)
-    return _first_crossings(ks, phi0, action0, max_iterations)
+    if _first_crossings.signatures:
+        return _first_crossings(ks, phi0, action0, max_iterations)
+    # The first call in a process compiles the loop (or loads it from Numba's cache): say so.
+    with compiling("the standard map's crossing counter"):
+        return _first_crossings(ks, phi0, action0, max_iterations)
 
 
 @dataclass(frozen=True)

@@ -35,6 +35,7 @@ function render({ model, el }) {
 
   let busyTimer = 0;
   let tickTimer = 0;
+  let busySince = 0; // when the current stretch of work began (0: no work under way)
 
   function show(sentence, kind) {
     text.textContent = sentence;
@@ -49,21 +50,28 @@ function render({ model, el }) {
   function update() {
     const kind = model.get("kind");
     const sentence = model.get("text");
+    const shownBusy = root.dataset.kind === "busy";
     stopBusy();
     if (kind !== "busy") {
+      busySince = 0;
       show(sentence, kind);
       return;
     }
-    const started = performance.now();
-    const delay = 1000 * model.get("busy_delay");
-    busyTimer = setTimeout(() => {
+    if (!busySince) busySince = performance.now();
+    const showBusy = () => {
       show(sentence, "busy");
       const tick = () => {
-        elapsed.textContent = ` ${((performance.now() - started) / 1000).toFixed(1)} s`;
+        elapsed.textContent = ` ${((performance.now() - busySince) / 1000).toFixed(1)} s`;
       };
       tick();
       tickTimer = setInterval(tick, 100);
-    }, delay);
+    };
+    // The delay keeps a short piece of work from flickering; once a busy sentence is shown,
+    // the next one (compiling, then computing) replaces it at once, with the seconds counted
+    // from the start of the work.
+    const wait = 1000 * model.get("busy_delay") - (performance.now() - busySince);
+    if (shownBusy || wait <= 0) showBusy();
+    else busyTimer = setTimeout(showBusy, wait);
   }
 
   function showCode() {
