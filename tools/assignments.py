@@ -99,14 +99,18 @@ def masters(names: list[str] | None = None) -> list[Path]:
 def build(master: Path, dist: Path = DIST) -> Path:
     """Run ``otter assign`` on ``master`` into ``dist/<name>/`` (replaced); return that folder.
 
-    No PDFs are made and nothing is fetched. Raises ``RuntimeError`` with otter's output if the
-    build fails or does not produce the student notebook, the solutions and the autograder zip.
+    No PDFs are made and nothing is fetched. otter's own run of the tests on the solutions is
+    left out (``--no-run-tests``): grading the solutions with the autograder zip, as ``build``
+    on the command line (unless ``--no-check``) and the test suite do next, runs the same
+    tests. Raises ``RuntimeError`` with otter's output if the build fails or does not produce
+    the student notebook, the solutions and the autograder zip.
     """
     out = dist / master.stem
     if out.exists():
         shutil.rmtree(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    command = [sys.executable, "-m", "otter", "assign", "--no-pdfs", master.name, str(out)]
+    command = [sys.executable, "-m", "otter", "assign", "--no-pdfs", "--no-run-tests",
+               master.name, str(out)]
     completed = subprocess.run(command, cwd=master.parent, capture_output=True, text=True,
                                env={**os.environ, "PYTHONWARNINGS": "ignore"}, check=False)
     log = completed.stdout + completed.stderr

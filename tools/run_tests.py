@@ -8,7 +8,8 @@ each shard's output when it ends and fails if either fails:
 
 * ``browser``: the browser tests, the website and the Binder environment (tests that start their
   own servers and environments, kept together so they never compete for a port or a folder);
-* ``core``: everything else: doctests, unit, property and symbolic tests, and the notebooks.
+* ``core``: everything else: doctests, unit, property and symbolic tests, and the graded
+  assignments. The notebooks run under nbval in the Binder test, in Binder's environment.
 
 ``--floors PYTHON`` adds a third job: the unit suite (what ``make check`` runs) under another
 interpreter, the one of the environment with the oldest supported versions pinned
@@ -31,7 +32,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 BROWSER_SHARD = ["tests/browser", "tests/site", "tests/binder"]
-CORE_SHARD = ["src", "tests", "notebooks"] + [f"--ignore={path}" for path in BROWSER_SHARD]
+# The notebooks' nbval run is the Binder test's (tests/binder): it runs them in the environment
+# Binder builds, so they are not run a fourth time here.
+CORE_SHARD = ["src", "tests"] + [f"--ignore={path}" for path in BROWSER_SHARD]
 #: What ``make check`` runs: the unit suite, without notebooks, browser, website or Binder.
 UNIT_SUITE = ["src", "tests"] + [f"--ignore={path}" for path in [*BROWSER_SHARD,
                                                                   "tests/assignments"]]
@@ -42,8 +45,10 @@ def floors_job(python: str, extra: list[str]) -> tuple[list[str], dict]:
     caches = ROOT / ".venv-floors-caches"
     env = {**os.environ, "PENDULUM_LAB_CACHE": str(caches / "kernels"),
            "NUMBA_CACHE_DIR": str(caches / "numba")}
+    # The benchmark items' smoke runs check the benchmark harness, which the main environment
+    # tests; at the floors they would repeat the library's runs that the unit tests make.
     command = [python, "-m", "pytest", "-o", "cache_dir=.pytest_cache/floors", *UNIT_SUITE,
-               *extra]
+               "--ignore=tests/benchmarks", *extra]
     return command, env
 
 
