@@ -2,8 +2,9 @@
 
 ``pendulum`` holds :class:`PendulumModel` (one system), :class:`ModelFamily` (many that differ
 in some numbers), the factories and the checks of a model argument; ``numeric`` the functions
-of a chain (lambdified, or looped for long chains); ``angles`` the wrapping of angles; ``system`` :class:`SystemModel`, the model of any
-mechanical system, and its factories.
+of a chain (lambdified, or looped for long chains) and of any system; ``angles`` the wrapping
+of angles; ``system`` :class:`SystemModel`, the model of any mechanical system, and the
+factories of the elastic, the Kapitza and the cart pendulum.
 """
 
 from .angles import reduce_turns, wrap_angle

@@ -22,7 +22,7 @@ import sympy as sp
 
 from ..codegen.kernels import load_system_kernels
 from ..symbolic.systems import MechanicalSystem, parameter_values
-from .numeric import compiled_system, solve_small
+from .numeric import compiled_system
 from .pendulum import PendulumModel
 
 __all__ = [
@@ -295,13 +295,14 @@ def kapitza_pendulum(amplitude: float = 0.05, frequency: float = 100.0, mass: fl
     potential ``-m g l cos(theta) + m a^2 w^2 sin(theta)^2 / 4``.
     """
     th = sp.Symbol("theta", real=True)
-    a, w, m, l, grav = sp.symbols("a w m l g", positive=True)
+    a, w, m, length, grav = sp.symbols("a w m l g", positive=True)
     t = sp.Symbol("t", real=True)
     values = {a: _positive("amplitude", amplitude), w: _positive("frequency", frequency),
-              m: _positive("mass", mass), l: _positive("length", length),
+              m: _positive("mass", mass), length: _positive("length", length),
               grav: _positive("g", g)}
     pivot_y = a * sp.cos(w * t)
-    return mechanical_system([th], values, points=[(l * sp.sin(th), pivot_y - l * sp.cos(th))],
+    bob = (length * sp.sin(th), pivot_y - length * sp.cos(th))
+    return mechanical_system([th], values, points=[bob],
                              masses=[m], gravity=grav, joints=[(-1, 0)],
                              name="the Kapitza pendulum", period=2 * math.pi / frequency)
 
@@ -315,10 +316,10 @@ def cart_pendulum(cart_mass: float = 1.0, mass: float = 0.5, length: float = 1.0
     ``(x + l sin(theta), -l cos(theta))``.
     """
     x, th = sp.symbols("x theta", real=True)
-    big_m, m, l, grav = sp.symbols("M m l g", positive=True)
+    big_m, m, rod, grav = sp.symbols("M m l g", positive=True)
     values = {big_m: _positive("cart_mass", cart_mass), m: _positive("mass", mass),
-              l: _positive("length", length), grav: _positive("g", g)}
-    return mechanical_system([x, th], values,
-                             points=[(x, sp.Integer(0)), (x + l * sp.sin(th), -l * sp.cos(th))],
+              rod: _positive("length", length), grav: _positive("g", g)}
+    bob = (x + rod * sp.sin(th), -rod * sp.cos(th))
+    return mechanical_system([x, th], values, points=[(x, sp.Integer(0)), bob],
                              masses=[big_m, m], gravity=grav, joints=[(0, 1)],
                              name="the pendulum on a cart")

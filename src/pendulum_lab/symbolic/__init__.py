@@ -1,8 +1,10 @@
 """The symbolic layer: the equations of motion derived with SymPy, before any number is bound.
 
 ``mechanics`` derives chains of n links (Lagrangian, mass matrix, forcing, Hamiltonian,
-equilibria); ``discrete_mechanics`` their discrete Lagrangians for the variational methods;
-``systems`` derives any holonomic system from its points or its Lagrangian; ``errata`` checks the course report's formulas against the derivation, symbol by symbol.
+equilibria); ``systems`` any holonomic system from its points or its Lagrangian (a chain is
+one case); ``discrete_mechanics`` the chains' discrete Lagrangians for the variational
+methods; ``errata`` checks the course report's formulas against the derivation, symbol by
+symbol.
 It knows pendulums and nothing of integrators.
 """
 
