@@ -2,10 +2,11 @@
 
 ``kernels`` prints a chain's (or any mechanical system's) SymPy expressions as the kernels
 ``hamilton``, ``acceleration`` and ``stages`` (and the discrete Legendre transforms of the
-variational methods); ``cache`` writes generated code into the kernel cache under a key of all the code it depends on;
-``long_chains`` evaluates chains of any length link by link instead; ``signatures`` fixes the
-calling convention of every kernel; ``lowlevel`` is the one module that reaches below ordinary
-Numba code (with the sines and cosines the vectorized ``stages`` kernel uses).
+variational methods); ``cache`` writes generated code into the kernel cache under a key of
+all the code it depends on; ``long_chains`` evaluates chains of any length link by link
+instead; ``signatures`` fixes the calling convention of every kernel; ``lowlevel`` is the one
+module that reaches below ordinary Numba code (with the sines and cosines the vectorized
+``stages`` kernel uses).
 """
 
 from .cache import cache_dir, code_key, load_generated
