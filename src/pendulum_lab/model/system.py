@@ -295,13 +295,13 @@ def kapitza_pendulum(amplitude: float = 0.05, frequency: float = 100.0, mass: fl
     potential ``-m g l cos(theta) + m a^2 w^2 sin(theta)^2 / 4``.
     """
     th = sp.Symbol("theta", real=True)
-    a, w, m, length, grav = sp.symbols("a w m l g", positive=True)
+    a, w, m, rod, grav = sp.symbols("a w m l g", positive=True)
     t = sp.Symbol("t", real=True)
     values = {a: _positive("amplitude", amplitude), w: _positive("frequency", frequency),
-              m: _positive("mass", mass), length: _positive("length", length),
+              m: _positive("mass", mass), rod: _positive("length", length),
               grav: _positive("g", g)}
     pivot_y = a * sp.cos(w * t)
-    bob = (length * sp.sin(th), pivot_y - length * sp.cos(th))
+    bob = (rod * sp.sin(th), pivot_y - rod * sp.cos(th))
     return mechanical_system([th], values, points=[bob],
                              masses=[m], gravity=grav, joints=[(-1, 0)],
                              name="the Kapitza pendulum", period=2 * math.pi / frequency)
