@@ -267,7 +267,7 @@ def _positive(name: str, value) -> float:
     return float(value)
 
 
-def elastic_pendulum(mass: float = 1.0, stiffness: float = 4 * 9.81 / 0.75,
+def elastic_pendulum(mass: float = 1.0, stiffness: float = 4 * 9.81,
                      rest_length: float = 0.75, g: float = 9.81) -> SystemModel:
     """A mass on a spring that swings in a plane: coordinates ``(r, theta)``.
 

@@ -111,6 +111,13 @@ def _tidy(expr) -> sp.Expr:
     return sp.expand(TR10i(sp.factor_terms(expr)))
 
 
+def _vanishes(expr) -> bool:
+    """Zero, exactly or (for a number computed from floats) to round-off."""
+    if expr == 0:
+        return True
+    return not expr.free_symbols and abs(complex(expr)) < 1e-9
+
+
 @dataclass(frozen=True)
 class SystemEquilibrium(Equilibrium):
     """An equilibrium ``(q*, q'* = 0)`` of an autonomous system.
@@ -424,7 +431,7 @@ class MechanicalSystem:
         self._require_autonomous("An equilibrium")
         at = dict(zip(self.q, point)) | {w: 0 for w in self.omega} | dict(subs or {})
         residual = self.forcing.xreplace(at).applyfunc(sp.simplify)
-        if any(e != 0 for e in residual):
+        if any(not _vanishes(e) for e in residual):
             raise ValueError(f"`point` {tuple(point)} is not an equilibrium: the forcing there "
                              f"is {list(residual)}")
         inverse = self.mass_matrix.xreplace(at).inv()
