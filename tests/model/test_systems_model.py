@@ -129,6 +129,16 @@ def test_chain_kernels_unchanged_and_a_system_chain_runs_like_the_chain():
     assert np.max(np.abs(a.theta - b.theta)) < 1e-10
 
 
+def test_lengths_are_never_reduced_by_whole_turns(elastic):
+    """A chain's large angles are reduced by 2 pi turns; a spring's length must not be."""
+    r0, dt = 9000.0, 1e-3
+    q, _ = pl.step(elastic, [r0, 0.0], [0.0, 0.0], dt=dt, method="rk4")
+    acceleration = elastic.accelerations([r0, 0.0], [0.0, 0.0])[0]
+    assert abs(q[0] - (r0 + acceleration * dt**2 / 2)) < 1e-6
+    run = pl.simulate(elastic, [r0, 0.0], [0.0, 0.0], t_end=dt, dt=dt, method="rk4")
+    assert abs(run.theta[-1, 0] - q[0]) < 1e-9
+
+
 # ---- bad input ------------------------------------------------------------------------------
 def test_methods_that_do_not_apply_are_refused_naming_those_that_do(elastic, kapitza):
     with pytest.raises(ValueError, match="variational_midpoint.*Methods that can: .*glrk4"):

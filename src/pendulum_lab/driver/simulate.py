@@ -550,7 +550,7 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    reduction = AngleReduction.of(q)
+    reduction = AngleReduction.of(q) if model.periodic_coordinates else None
     if reduction is not None:
         q = reduction.reduced.copy()
     y = start.reshape(-1, model.n)
@@ -768,7 +768,7 @@ def simulate(
     check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    reduction = AngleReduction.of(q)
+    reduction = AngleReduction.of(q) if model.periodic_coordinates else None
     if reduction is not None:
         q = reduction.reduced.copy()
     y = to_method_variables(row_models, method, q, start.reshape(-1, model.n),

@@ -163,6 +163,10 @@ class PendulumModel:
         self._fn = compiled_chain(self.n, self.forced)
         self._params = self._parameters(self.forced)
 
+    #: Every coordinate is an angle the equations are 2 pi-periodic in (so the driver may
+    #: reduce large initial angles by whole turns); False for a ``SystemModel``.
+    periodic_coordinates: bool = True
+
     #: Shape of the parameters: ``()`` for one model; a
     #: :class:`~pendulum_lab.model.ModelFamily` has one model per entry.
     shape: tuple = ()

@@ -72,6 +72,9 @@ class SystemModel(PendulumModel):
         self._params = tuple(numbers[s] for s in system.parameters)
         self._period = None if period is None else float(period)
 
+    #: Its coordinates may be lengths or positions: never reduced by whole turns.
+    periodic_coordinates = False
+
     # ---- what the driver asks ------------------------------------------------------
     @property
     def name(self) -> str:
