@@ -170,3 +170,50 @@ def test_bad_input_is_refused_naming_the_argument(elastic):
     with pytest.raises(ValueError, match="`points\\[0\\]` uses c, which is neither"):
         pl.mechanical_system([x], {"m": 1.0}, points=[(x + sp.Symbol("c"), 0)],
                              masses=[sp.Symbol("m")])
+
+
+def kapitza_reference(kapitza, theta0, t_end):
+    p0 = kapitza.momenta(theta0, [0.0], t=0.0)
+    ref = solve_ivp(hamilton_ode(kapitza), (0, t_end), [*theta0, *p0], method="DOP853",
+                    rtol=1e-13, atol=1e-13)
+    return ref.y[0, -1]
+
+
+@pytest.mark.parametrize("method", ["explicit_euler", "semi_implicit_euler", "leapfrog", "rk4",
+                                    "glrk4", "semi_implicit_euler_velocity", "leapfrog_velocity",
+                                    "conformal_euler", "conformal_leapfrog"])
+def test_every_method_that_applies_to_kapitza_converges_at_its_order(kapitza, method):
+    """The time-dependent field through every method's own handling of t: the error against
+    DOP853 falls by 2**order when the step is halved (negative control: a method that froze
+    the drive at t = 0 would converge to another motion, and its error would not fall)."""
+    theta0, t_end = [2.9], 0.2
+    exact = kapitza_reference(kapitza, theta0, t_end)
+    errors = [abs(pl.simulate(kapitza, theta0, [0.0], t_end=t_end, dt=dt, method=method,
+                              keep="final").theta[-1, 0] - exact) for dt in (1e-3, 5e-4)]
+    observed = np.log2(errors[0] / errors[1])
+    assert observed > pl.get_method(method).order - 0.3, (errors, observed)
+
+
+@pytest.mark.parametrize("method", ["glrk8", "glrk12", "glrk16"])
+def test_high_order_gauss_methods_match_dop853_on_kapitza(kapitza, method):
+    exact = kapitza_reference(kapitza, [2.9], 0.2)
+    run = pl.simulate(kapitza, [2.9], [0.0], t_end=0.2, dt=1e-3, method=method, keep="final")
+    assert abs(run.theta[-1, 0] - exact) < 1e-10
+
+
+@pytest.mark.parametrize("factory", ["elastic_pendulum", "kapitza_pendulum", "cart_pendulum"])
+def test_generated_kernels_equal_the_numpy_vector_field(factory):
+    model = getattr(pl, factory)()
+    kernels, params = model.kernels(), np.array(list(model.parameter_values.values()))
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q, p = rng.uniform(0.5, 1.5, (2, model.n))
+        t = float(rng.uniform(0, 1))
+        dq, dp = np.empty(model.n), np.empty(model.n)
+        kernels.hamilton(t, q, p, params, dq, dp)
+        want_dq, want_dp = model.vector_field(q, p, t=t)
+        assert np.allclose(dq, want_dq, rtol=1e-12, atol=1e-12)
+        assert np.allclose(dp, want_dp, rtol=1e-12, atol=1e-12)
+        out = np.empty(model.n)
+        kernels.acceleration(t, q, want_dq, params, out)
+        assert np.allclose(out, model.accelerations(q, want_dq, t=t), rtol=1e-12, atol=1e-12)

@@ -213,6 +213,12 @@ def kernel_source(chain: Chain) -> str:
     trig_lines, trig = _trig_lines(mass + list(momentum_rates) + offset, mapping)
     hamilton = trig_lines
     if offset:  # p = M omega + b: solve M omega = p - b
+        # the sines and cosines of b recur in dL/dq: computed once, before both
+        calls = {call for b in offset
+                 for call in sp.sympify(b).xreplace(mapping).xreplace(trig).atoms(sp.sin, sp.cos)}
+        for k, call in enumerate(sorted(calls, key=str)):
+            hamilton.append(f"trig{k} = {sp.pycode(call)}")
+            trig = trig | {call: sp.Symbol(f"trig{k}", real=True)}
         shifted = [f"r{i}" for i in range(n)] if n <= 2 else [f"shifted[{i}]" for i in range(n)]
         if n > 2:
             hamilton += [f"shifted = np.empty({n})"]
@@ -281,10 +287,8 @@ def acceleration(t, q, v, params, out):
 
 def _momentum_offset(system) -> list:
     """The entries of ``b`` in ``p = M omega + b`` (a moving pivot's); ``[]`` when all zero."""
-    offset = getattr(system, "momentum_offset", None)
-    if offset is None or all(sp.sympify(b) == 0 for b in offset):
-        return []
-    return list(offset)
+    offset = system.momentum_offset
+    return [] if all(sp.sympify(b) == 0 for b in offset) else list(offset)
 
 
 def _source_header(system) -> str:
