@@ -113,6 +113,9 @@ class Config:
     cluster_size: int = 1000  # item 14: flip-time map on a Dask LocalCluster
     cluster_t_end: float = 10.0
     cluster_workers: int = 2
+    systems_steps: int = 50_000  # item 15: systems given by their points
+    systems_rounds: int = 3
+    systems_first_use: bool = True  # fresh processes with empty kernel caches
 
 
 FULL = Config("full")
@@ -146,6 +149,8 @@ QUICK = replace(
     per_eval_repeats=1,
     per_eval_rounds=1,
     per_eval_before=False,
+    systems_steps=20000,
+    systems_rounds=1,
     floor_t_end=100.0,
     peer_t_end=100.0,
     peer_long_t_end=300.0,
@@ -200,6 +205,9 @@ SMOKE = replace(
     per_eval_repeats=1,
     per_eval_rounds=1,
     per_eval_before=False,
+    systems_steps=500,
+    systems_rounds=1,
+    systems_first_use=False,
     floor_dt=0.01,
     floor_t_end=1.0,
     peer_t_end=2.0,

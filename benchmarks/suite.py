@@ -42,6 +42,7 @@ from item_peers import bench_heyoka, bench_pyhamsys
 from item_per_eval import bench_per_eval
 from item_report_glrk4 import bench_report_glrk4
 from item_slider import bench_slider
+from item_systems import bench_systems
 from item_variational import bench_variational
 
 __all__ = [
@@ -78,6 +79,7 @@ ITEMS = {
     "pyhamsys": (12, bench_pyhamsys, False),
     "long_chains": (13, bench_long_chains, False),
     "distributed": (14, bench_distributed, False),
+    "systems": (15, bench_systems, False),
 }
 
 

@@ -38,12 +38,17 @@ from .integrators import (
 from .model import (
     ModelFamily,
     PendulumModel,
+    SystemModel,
+    cart_pendulum,
     double_pendulum,
     driven_pendulum,
+    elastic_pendulum,
+    kapitza_pendulum,
+    mechanical_system,
     n_pendulum,
     simple_pendulum,
 )
-from .symbolic import Chain, derive_chain
+from .symbolic import Chain, MechanicalSystem, derive_chain
 from .version import __version__
 
 # Layers loaded on first use (ipywidgets and matplotlib are slow to import), and the names the
@@ -105,18 +110,24 @@ __all__ = [
     "METHODS",
     "Chain",
     "ConvergenceError",
+    "MechanicalSystem",
     "Method",
     "ModelFamily",
     "PendulumModel",
     "SegmentedRun",
+    "SystemModel",
     "Trajectory",
     "VARIATIONAL_METHODS",
+    "cart_pendulum",
     "derive_chain",
     "double_pendulum",
     "driven_pendulum",
+    "elastic_pendulum",
     "get_method",
     "hamiltonian_field",
     "henon_step",
+    "kapitza_pendulum",
+    "mechanical_system",
     "modified_hamiltonian",
     "n_pendulum",
     "simple_pendulum",

@@ -148,3 +148,23 @@ def test_a_name_that_never_existed_is_an_attribute_error():
     # negative control: the lookup is not satisfied by anything at all
     with pytest.raises(AttributeError):
         pl.no_such_module  # noqa: B018
+
+
+#: Names added since the layering, with the module that holds each.
+ADDED = {
+    "pl": ("MechanicalSystem", "SystemModel", "cart_pendulum", "elastic_pendulum",
+           "kapitza_pendulum", "mechanical_system"),
+    "model": ("SystemModel", "cart_pendulum", "elastic_pendulum", "kapitza_pendulum",
+              "mechanical_system"),
+    "codegen": ("load_system_kernels",),
+    "symbolic": ("MechanicalSystem",),
+}
+
+
+@pytest.mark.parametrize("module", sorted(ADDED))
+def test_every_added_public_name_resolves_and_is_exported(module):
+    owner = pl if module == "pl" else getattr(pl, module)
+    assert [name for name in ADDED[module] if not hasattr(owner, name)] == []
+    exported = getattr(owner, "__all__", None)
+    if module == "pl" or exported is not None:
+        assert set(ADDED[module]) <= set(exported)

@@ -1,11 +1,12 @@
 """The codegen layer: the symbolic equations printed as compiled Numba kernels.
 
-``kernels`` prints a chain's SymPy expressions as the kernels ``hamilton``, ``acceleration``
-and ``stages`` (and the discrete Legendre transforms of the variational methods); ``cache``
-writes generated code into the kernel cache under a key of all the code it depends on;
-``long_chains`` evaluates chains of any length link by link instead; ``signatures`` fixes the
-calling convention of every kernel; ``lowlevel`` is the one module that reaches below ordinary
-Numba code (with the sines and cosines the vectorized ``stages`` kernel uses).
+``kernels`` prints a chain's (or any mechanical system's) SymPy expressions as the kernels
+``hamilton``, ``acceleration`` and ``stages`` (and the discrete Legendre transforms of the
+variational methods); ``cache`` writes generated code into the kernel cache under a key of
+all the code it depends on; ``long_chains`` evaluates chains of any length link by link
+instead; ``signatures`` fixes the calling convention of every kernel; ``lowlevel`` is the one
+module that reaches below ordinary Numba code (with the sines and cosines the vectorized
+``stages`` kernel uses).
 """
 
 from .cache import cache_dir, code_key, load_generated
@@ -16,6 +17,7 @@ from .kernels import (
     kernel_source,
     load_discrete_kernels,
     load_kernels,
+    load_system_kernels,
     looped_kernels,
     paired_trig,
     parameters_array,
@@ -34,6 +36,7 @@ __all__ = [
     "load_discrete_kernels",
     "load_generated",
     "load_kernels",
+    "load_system_kernels",
     "looped_kernels",
     "paired_trig",
     "parameters_array",

@@ -156,7 +156,8 @@ class SegmentedRun:
         self._size = self._theta.shape[0]
         # Huge angles step reduced by whole turns; the segments show them continued from
         # the angles given (see AngleReduction).
-        self._reduction = AngleReduction.of(self._theta, stacklevel=4)
+        self._reduction = (AngleReduction.of(self._theta, stacklevel=4)
+                           if model.periodic_coordinates else None)
         if self._reduction is not None:
             self._theta = self._reduction.reduced.copy()
         self._state = to_method_variables(self.model, method, self._theta,
@@ -254,7 +255,8 @@ class SegmentedRun:
                              f"{p.shape}")
         # Copies: the current state is a view into the last segment handed out.
         self._theta, self._state = self._theta.copy(), self._state.copy()
-        moved = AngleReduction.of(theta)  # the new angles are given as the segments show them
+        # the new angles are given as the segments show them
+        moved = AngleReduction.of(theta) if self.model.periodic_coordinates else None
         if moved is not None or self._reduction is not None:
             none = np.zeros((self._size, n))
             current = self._reduction or AngleReduction(none, none, none.astype(bool))

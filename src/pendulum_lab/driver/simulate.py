@@ -33,7 +33,7 @@ from ..integrators import (
     suitable_methods,
     unsuitability,
 )
-from ..model import PendulumModel, reduce_turns, require_model
+from ..model import PendulumModel, SystemModel, reduce_turns, require_model
 from .loops import (
     CALLS,
     NOT_CONVERGED,
@@ -175,6 +175,12 @@ def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
     row per member (its shape flattened), and so do the damping rates.
     """
     rate = model.conformal_damping_rate
+    if isinstance(model, SystemModel):  # the kernels of its own equations, same generator
+        kernels = model.kernels()
+        return HamiltonianField(kernels.hamilton, kernels.acceleration,
+                                np.array(tuple(model.parameter_values.values()), dtype=float),
+                                model.separable, np.nan if rate is None else rate, None,
+                                kernels.stages, kernels.description)
     if not model.shape:
         return _field(model.n, model.forced, tuple(model.parameter_values.values()),
                       model.separable, np.nan if rate is None else rate)
@@ -544,15 +550,15 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    reduction = AngleReduction.of(q)
+    reduction = AngleReduction.of(q) if model.periodic_coordinates else None
     if reduction is not None:
         q = reduction.reduced.copy()
     y = start.reshape(-1, model.n)
-    y = to_method_variables(row_models, method, q, y, given_momenta=p0 is not None)
+    y = to_method_variables(row_models, method, q, y, given_momenta=p0 is not None, t=t0)
     compile_method(method, field, model.n).step_rows(q, y, dt, f"dt = {dt:g}", t0=t0)
     if method.variables == "velocity":
         with np.errstate(over="ignore", invalid="ignore"):  # a non-finite step, warned below
-            y = row_models.momenta(q, y)
+            y = row_models.momenta(q, y, t=t0 + dt)
     if not (np.isfinite(q).all() and np.isfinite(y).all()):
         bad = ~(np.isfinite(q).all(axis=-1) & np.isfinite(y).all(axis=-1))
         warn_not_finite(method, 1, t0 + dt, int(bad.sum()), members,
@@ -562,13 +568,16 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
     return q.reshape(shape), y.reshape(shape)
 
 
-def to_method_variables(model, method, q, y, given_momenta: bool) -> np.ndarray:
-    """``y`` (momenta or velocities, rows like ``q``) as a new C array in the method's variables."""
+def to_method_variables(model, method, q, y, given_momenta: bool, t=None) -> np.ndarray:
+    """``y`` (momenta or velocities, rows like ``q``) as a new C array in the method's variables.
+
+    ``t``: the time of the states (where a moving pivot makes ``p`` depend on it).
+    """
     canonical = method.variables == "canonical"
     if canonical and not given_momenta:
-        y = model.momenta(q, y)
+        y = model.momenta(q, y, t=t)
     elif not canonical and given_momenta:
-        y = model.velocities(q, y)
+        y = model.velocities(q, y, t=t)
     return np.array(y, order="C")
 
 
@@ -759,11 +768,11 @@ def simulate(
     check_method_fits(model, method, field)
     # Copies: the compiled loop updates its arguments in place.
     q = theta0.reshape(-1, model.n).copy()
-    reduction = AngleReduction.of(q)
+    reduction = AngleReduction.of(q) if model.periodic_coordinates else None
     if reduction is not None:
         q = reduction.reduced.copy()
     y = to_method_variables(row_models, method, q, start.reshape(-1, model.n),
-                             given_momenta=p0 is not None)
+                             given_momenta=p0 is not None, t=t0)
     compiled = compile_method(method, field, model.n)
     compile_time = compile_seconds() - compiled_before
     traj = integrate(model, compiled, q, y, batch_shape, t_end=t_end, dt=dt, n_steps=n_steps,
@@ -855,15 +864,17 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     out_shape = (kept, *batch_shape, model.n)
     theta = np.ascontiguousarray(saved_q[:, :kept].swapaxes(0, 1)).reshape(out_shape)
     saved = np.ascontiguousarray(saved_y[:, :kept].swapaxes(0, 1)).reshape(out_shape)
+    times = t0 + np.arange(kept) * (save_every * dt)
+    at = times.reshape(-1, *(1,) * len(batch_shape))  # the time of each saved state
     if method.variables == "canonical":
-        p, omega = saved, model.velocities(theta, saved)
+        p, omega = saved, model.velocities(theta, saved, t=at)
     else:
-        omega, p = saved, model.momenta(theta, saved)
+        omega, p = saved, model.momenta(theta, saved, t=at)
     with np.errstate(over="ignore", invalid="ignore"):  # states just before a blow-up
-        kinetic = model.kinetic_energy(theta, omega)
-        potential = model.potential_energy(theta)
+        kinetic = model.kinetic_energy(theta, omega, t=at)
+        potential = model.potential_energy(theta, t=at)
     return Trajectory(
-        t=t0 + np.arange(kept) * (save_every * dt),
+        t=times,
         theta=theta,
         omega=omega,
         p=p,

@@ -2,7 +2,9 @@
 
 ``pendulum`` holds :class:`PendulumModel` (one system), :class:`ModelFamily` (many that differ
 in some numbers), the factories and the checks of a model argument; ``numeric`` the functions
-of a chain (lambdified, or looped for long chains); ``angles`` the wrapping of angles.
+of a chain (lambdified, or looped for long chains) and of any system; ``angles`` the wrapping
+of angles; ``system`` :class:`SystemModel`, the model of any mechanical system, and the
+factories of the elastic, the Kapitza and the cart pendulum.
 """
 
 from .angles import reduce_turns, wrap_angle
@@ -17,11 +19,23 @@ from .pendulum import (
     require_model,
     simple_pendulum,
 )
+from .system import (
+    SystemModel,
+    cart_pendulum,
+    elastic_pendulum,
+    kapitza_pendulum,
+    mechanical_system,
+)
 
 __all__ = [
     "FAMILY_PARAMETERS",
     "ModelFamily",
     "PendulumModel",
+    "SystemModel",
+    "cart_pendulum",
+    "elastic_pendulum",
+    "kapitza_pendulum",
+    "mechanical_system",
     "double_pendulum",
     "driven_pendulum",
     "n_pendulum",

@@ -17,7 +17,7 @@ import sympy as sp
 from ..codegen.kernels import UNROLLED_MAX_LINKS
 from ..symbolic.mechanics import Chain, derive_chain
 
-__all__ = ["CompiledChain", "compiled_chain", "solve_small"]
+__all__ = ["CompiledChain", "CompiledSystem", "compiled_chain", "compiled_system", "solve_small"]
 
 
 def _lambdify(args, exprs, shape):
@@ -148,3 +148,94 @@ def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return np.linalg.solve(matrix, rhs[..., None])[..., 0]
 
 
+
+
+class CompiledSystem:
+    """The lambdified functions of a :class:`~pendulum_lab.symbolic.systems.MechanicalSystem`.
+
+    The methods of :class:`CompiledChain`, each with the time ``t`` as last argument (a
+    moving pivot makes the mass matrix, the momenta and the energies depend on it), plus
+    ``momentum_offset`` (``b`` of ``p = M omega + b``), ``lagrangian_rest`` (``L`` at rest)
+    and the points' ``positions``. Same helpers as a chain's (``_lambdify``, ``solve_small``).
+    """
+
+    def __init__(self, system):
+        n, q, w, t = system.n, list(system.q), list(system.omega), system.t
+        state_args = (*q, *w, *system.parameters, t)
+        config_args = (*q, *system.parameters, t)
+        forces = system.generalized_forces
+        dl_dq = system.dlagrangian_dq
+        dl_dw = sp.Matrix([system.lagrangian.diff(wi) for wi in w])
+        rest = system.lagrangian.xreplace({wi: 0 for wi in w})
+        self._mass_matrix = _lambdify(config_args, system.mass_matrix, (n, n))
+        self._offset = _lambdify(config_args, system.momentum_offset, (n,))
+        self._forcing = _lambdify(state_args, system.forcing, (n,))
+        self._generalized_forces = _lambdify(state_args, forces, (n,))
+        self._dlagrangian_dq = _lambdify(state_args, dl_dq, (n,))
+        self._kinetic = _lambdify(state_args, [system.kinetic], ())
+        self._potential = _lambdify(config_args, [system.potential], ())
+        self._rest = _lambdify(config_args, [rest], ())
+        # Jacobian pieces of Hamilton's equations in (q, omega), the forces Q included.
+        self._rate_q = _lambdify(state_args, (dl_dq + forces).jacobian(q), (n, n))
+        self._rate_w = _lambdify(state_args, (dl_dq + forces).jacobian(w), (n, n))
+        self._dmomenta_dq = _lambdify(state_args, dl_dw.jacobian(q), (n, n))
+        coordinates = [c for point in system.points for c in point]
+        self.points = len(system.points)
+        if coordinates:
+            self._positions = _lambdify(config_args, coordinates, (self.points, 2))
+        self.has_offset = any(b != 0 for b in system.momentum_offset)
+
+    def mass_matrix(self, q, params, t):
+        return self._mass_matrix(*_config(q, (*params, t)))
+
+    def momentum_offset(self, q, params, t):
+        return self._offset(*_config(q, (*params, t)))
+
+    def velocities(self, q, p, params, t):
+        p = np.asarray(p, float)
+        if self.has_offset:
+            p = p - self.momentum_offset(q, params, t)
+        return solve_small(self.mass_matrix(q, params, t), p)
+
+    def momenta(self, q, omega, params, t):
+        p = np.einsum("...ij,...j->...i", self.mass_matrix(q, params, t), omega)
+        return p + self.momentum_offset(q, params, t) if self.has_offset else p
+
+    def dlagrangian_dq(self, q, omega, params, t):
+        return self._dlagrangian_dq(*_state(q, omega, (*params, t)))
+
+    def forcing(self, q, omega, params, t):
+        return self._forcing(*_state(q, omega, (*params, t)))
+
+    def accelerations(self, q, omega, params, t):
+        return solve_small(self.mass_matrix(q, params, t), self.forcing(q, omega, params, t))
+
+    def generalized_forces(self, q, omega, params, t):
+        return self._generalized_forces(*_state(q, omega, (*params, t)))
+
+    def kinetic(self, q, omega, params, t):
+        return self._kinetic(*_state(q, omega, (*params, t)))
+
+    def potential(self, q, params, t):
+        return self._potential(*_config(q, (*params, t)))
+
+    def lagrangian_rest(self, q, params, t):
+        return self._rest(*_config(q, (*params, t)))
+
+    def rate_q(self, q, omega, params, t):
+        return self._rate_q(*_state(q, omega, (*params, t)))
+
+    def rate_w(self, q, omega, params, t):
+        return self._rate_w(*_state(q, omega, (*params, t)))
+
+    def dmomenta_dq(self, q, omega, params, t):
+        return self._dmomenta_dq(*_state(q, omega, (*params, t)))
+
+    def positions(self, q, params, t):
+        return self._positions(*_config(q, (*params, t)))
+
+
+@functools.cache
+def compiled_system(system) -> CompiledSystem:
+    """The numeric functions of ``system``, made once per system."""
+    return CompiledSystem(system)

@@ -163,6 +163,10 @@ class PendulumModel:
         self._fn = compiled_chain(self.n, self.forced)
         self._params = self._parameters(self.forced)
 
+    #: Every coordinate is an angle the equations are 2 pi-periodic in (so the driver may
+    #: reduce large initial angles by whole turns); False for a ``SystemModel``.
+    periodic_coordinates: bool = True
+
     #: Shape of the parameters: ``()`` for one model; a
     #: :class:`~pendulum_lab.model.ModelFamily` has one model per entry.
     shape: tuple = ()
@@ -352,25 +356,27 @@ class PendulumModel:
         return omega, (self._fn.dlagrangian_dq(theta, omega, self._params)
                        + self._fn.generalized_forces(theta, omega, self._params, self._time(t)))
 
-    def momenta(self, theta, omega) -> np.ndarray:
-        """``p = M(theta) omega``."""
+    def momenta(self, theta, omega, t=None) -> np.ndarray:
+        """``p = M(theta) omega`` (``t``, accepted as by every model, does not enter)."""
         return self._fn.momenta(self._states("theta", theta), self._states("omega", omega),
                                 self._params)
 
-    def velocities(self, theta, p) -> np.ndarray:
-        """``omega = M(theta)^-1 p`` (this is ``dH/dp``)."""
+    def velocities(self, theta, p, t=None) -> np.ndarray:
+        """``omega = M(theta)^-1 p`` (this is ``dH/dp``; ``t`` does not enter)."""
         return self._fn.velocities(self._states("theta", theta), self._states("p", p),
                                    self._params)
 
-    def kinetic_energy(self, theta, omega) -> np.ndarray:
+    def kinetic_energy(self, theta, omega, t=None) -> np.ndarray:
+        """Kinetic energy (``t`` is accepted for the calling convention of every model; a chain's
+        energies do not depend on it)."""
         return self._fn.kinetic(self._states("theta", theta), self._states("omega", omega),
                                 self._params)
 
-    def potential_energy(self, theta) -> np.ndarray:
+    def potential_energy(self, theta, t=None) -> np.ndarray:
         """Potential energy, zero at the pivot's height."""
         return self._fn.potential(self._states("theta", theta), self._params)
 
-    def energy(self, theta, omega) -> np.ndarray:
+    def energy(self, theta, omega, t=None) -> np.ndarray:
         return self.kinetic_energy(theta, omega) + self.potential_energy(theta)
 
     # Hamilton's equations in canonical variables. dH/dq at fixed p equals

@@ -1,11 +1,14 @@
 """The symbolic layer: the equations of motion derived with SymPy, before any number is bound.
 
 ``mechanics`` derives chains of n links (Lagrangian, mass matrix, forcing, Hamiltonian,
-equilibria); ``discrete_mechanics`` their discrete Lagrangians for the variational methods;
-``errata`` checks the course report's formulas against the derivation, symbol by symbol.
+equilibria); ``systems`` any holonomic system from its points or its Lagrangian (a chain is
+one case); ``discrete_mechanics`` the chains' discrete Lagrangians for the variational
+methods; ``errata`` checks the course report's formulas against the derivation, symbol by
+symbol.
 It knows pendulums and nothing of integrators.
 """
 
 from .mechanics import Chain, derive_chain
+from .systems import MechanicalSystem
 
-__all__ = ["Chain", "derive_chain"]
+__all__ = ["Chain", "MechanicalSystem", "derive_chain"]

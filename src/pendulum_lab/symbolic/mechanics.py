@@ -372,6 +372,12 @@ class Chain:
         """``p = M(q) omega``."""
         return self.mass_matrix * self.omega
 
+    @property
+    def momentum_offset(self) -> sp.Matrix:
+        """``b`` of ``p = M omega + b``: zero, the pivot is fixed (the attribute of every system
+        the code generator reads, :class:`~pendulum_lab.symbolic.systems.MechanicalSystem`)."""
+        return sp.zeros(self.n, 1)
+
     @functools.cached_property
     def dissipation(self) -> sp.Expr:
         """Rayleigh's ``R = 1/2 sum_i c_i (omega_i - omega_(i-1))^2``; zero unless forced."""

@@ -1,0 +1,117 @@
+"""Item 15: systems described by their points against chains of the same number of coordinates.
+
+Two measurements per system (the elastic pendulum and the cart pendulum against the double
+pendulum, the Kapitza pendulum against the driven pendulum, the chain of one link whose field
+also depends on the time through a cosine):
+
+* **first use**: in a fresh process with an empty kernel cache, the seconds from
+  ``import pendulum_lab`` to the end of a first ``pl.simulate`` with RK4: building the model
+  (for a system, its symbolic derivation), generating and compiling its kernels and RK4's loop;
+* **cost per evaluation**: CPU time of ``pl.simulate`` with RK4 over ``systems_steps`` and a
+  tenth of them (the fixed cost of a call cancels in the difference), divided by the
+  difference of the field evaluations (four per step); interleaved rounds, medians.
+
+The target: a system's evaluation within 1.5x of the chain's of the same size.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+from harness import Config, Row, Section, fmt_time, interleave, med, timed
+
+import pendulum_lab as pl
+
+#: A system's cost per evaluation, at most this many times the chain's of the same size.
+TARGET = 1.5
+#: ``{name: (factory, initial angles, chain of the same size, its initial angles)}``.
+SYSTEMS = {
+    "elastic": ("elastic_pendulum", [1.05, 0.5], "double_pendulum", [1.0, 0.5]),
+    "cart": ("cart_pendulum", [0.0, 1.0], "double_pendulum", [1.0, 0.5]),
+    "kapitza": ("kapitza_pendulum", [3.0], "driven_pendulum", [1.0]),
+}
+
+_FIRST_USE = """
+import json, time
+start = time.perf_counter()
+import pendulum_lab as pl
+model = getattr(pl, {factory!r})()
+built = time.perf_counter()
+pl.simulate(model, {theta0!r}, [0.0] * model.n, t_end=0.02, dt=0.01, method="rk4")
+print(json.dumps({{"build": built - start, "total": time.perf_counter() - start}}))
+"""
+
+
+def _first_use(factory: str, theta0: list) -> dict:
+    """Seconds of a first use in a fresh process with an empty kernel cache."""
+    with tempfile.TemporaryDirectory(prefix="pendulum_systems_") as cache:
+        env = dict(os.environ, PENDULUM_LAB_CACHE=cache)
+        done = subprocess.run([sys.executable, "-c", _FIRST_USE.format(factory=factory,
+                                                                       theta0=theta0)],
+                              capture_output=True, text=True, env=env, timeout=900, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"first use of {factory} failed: {done.stderr.strip()[-400:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _per_evaluation(model, theta0, steps: int, dt: float, rounds: int) -> float:
+    """Median CPU seconds per field evaluation of RK4 on ``model``."""
+    omega0 = [0.0] * model.n
+    pl.simulate(model, theta0, omega0, t_end=2 * dt, dt=dt, method="rk4")  # compiled first
+
+    def run(n):
+        def go():
+            sample, _ = timed(pl.simulate, model, theta0, omega0, t_end=n * dt, dt=dt,
+                              method="rk4", keep="final", progress=False)
+            return sample
+        return go
+
+    samples = interleave({"long": run(steps), "short": run(steps // 10)}, rounds)
+    return (med(samples["long"]) - med(samples["short"])) / (4 * (steps - steps // 10))
+
+
+def bench_systems(cfg: Config) -> Section:
+    """First use and cost per evaluation of three systems against chains of their size."""
+    rows, details, data = [], [], {}
+    dt = 0.001  # fine enough for the Kapitza pendulum's shaking (omega = 100 rad/s)
+    per_eval_chain = {}
+    for name, (factory, theta0, chain, chain_theta0) in SYSTEMS.items():
+        model, reference = getattr(pl, factory)(), getattr(pl, chain)()
+        if chain not in per_eval_chain:
+            per_eval_chain[chain] = _per_evaluation(reference, chain_theta0, cfg.systems_steps,
+                                                    dt, cfg.systems_rounds)
+        ours = _per_evaluation(model, theta0, cfg.systems_steps, dt, cfg.systems_rounds)
+        ratio = ours / per_eval_chain[chain]
+        rows.append(Row("15", f"{name} ({model.n} coordinates), RK4: cost per evaluation",
+                        f"{ours * 1e9:.0f} ns", f"{chain} {per_eval_chain[chain] * 1e9:.0f} ns",
+                        f"{ratio:.2f}", f"<= {TARGET}", _verdict(ratio)))
+        entry = {"per_eval": ours, "chain_per_eval": per_eval_chain[chain], "ratio": ratio}
+        if cfg.systems_first_use:
+            first, first_chain = _first_use(factory, theta0), _first_use(chain, chain_theta0)
+            first_ratio = first["total"] / first_chain["total"]
+            rows.append(Row("15", f"{name}: first use (build, kernels, first simulate), cold "
+                                  "cache", fmt_time(first["total"]),
+                            f"{chain} {fmt_time(first_chain['total'])}", f"{first_ratio:.2f}",
+                            "(info)", "info"))
+            entry |= {"first_use": first, "chain_first_use": first_chain,
+                      "first_use_ratio": first_ratio}
+        data[name] = entry
+    details.append(
+        f"RK4 at dt = {dt:g}: CPU time over {cfg.systems_steps} steps minus over a tenth of them, "
+        f"per evaluation (4 per step), medians of {cfg.systems_rounds} interleaved round(s). "
+        "First use: a fresh process with an empty kernel cache, from `import pendulum_lab` to "
+        "the end of a first `pl.simulate` with RK4 (the system's time includes its symbolic "
+        "derivation; both compile their kernels and RK4's loop)"
+        + ("." if cfg.systems_first_use else " (not run in this configuration)."))
+    return Section("systems", "15. Systems given by their points against chains", rows, details,
+                   data)
+
+
+def _verdict(ratio: float) -> str:
+    from harness import verdict
+
+    return verdict(ratio, TARGET)

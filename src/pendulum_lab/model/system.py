@@ -1,0 +1,328 @@
+"""Numeric models of any mechanical system: a :class:`SystemModel` is a
+:class:`~pendulum_lab.PendulumModel` whose equations come from a
+:class:`~pendulum_lab.symbolic.systems.MechanicalSystem` instead of a chain.
+
+It has the methods of a chain's model, so :func:`~pendulum_lab.simulate`,
+:func:`~pendulum_lab.step` and the methods accept it; each numeric method also takes the
+time ``t`` (a moving pivot makes the momenta and the energies depend on it; ``t`` may be
+left out where nothing depends on it). ``theta`` names the generalized coordinates, as for
+a chain, whatever they are (a length, a cart's position). The kernels come from the one
+generator of :mod:`pendulum_lab.codegen.kernels`.
+
+:func:`mechanical_system` builds one from a description; :func:`elastic_pendulum`,
+:func:`kapitza_pendulum` and :func:`cart_pendulum` are the classics of a mechanics course.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import sympy as sp
+
+from ..codegen.kernels import load_system_kernels
+from ..symbolic.systems import MechanicalSystem, parameter_values
+from .numeric import compiled_system
+from .pendulum import PendulumModel
+
+__all__ = [
+    "SystemModel",
+    "cart_pendulum",
+    "elastic_pendulum",
+    "kapitza_pendulum",
+    "mechanical_system",
+]
+
+
+class SystemModel(PendulumModel):
+    """A :class:`~pendulum_lab.symbolic.systems.MechanicalSystem` with its parameters bound.
+
+    Parameters
+    ----------
+    system : MechanicalSystem
+    values : dict, optional
+        Values replacing some of the system's defaults, ``{symbol or name: number}``.
+    period : float, optional
+        The period of the time dependence [s] (a shaken pivot's), for messages about
+        rounded times.
+
+    Attributes
+    ----------
+    system : MechanicalSystem
+        Its symbolic equations (also ``chain``, the attribute the code generator reads).
+    n : int
+        Number of generalized coordinates.
+    """
+
+    def __init__(self, system: MechanicalSystem, values: dict | None = None, *,
+                 period: float | None = None):
+        if not isinstance(system, MechanicalSystem):
+            raise TypeError(f"`system` must be a MechanicalSystem, got {type(system).__name__}")
+        given = parameter_values({} if values is None else values)
+        by_name = {str(s): s for s in system.parameters}
+        unknown = [str(s) for s in given if str(s) not in by_name]
+        if unknown:
+            raise ValueError(f"`values` names {unknown}, which are not parameters of "
+                             f"{system.name}; its parameters are {list(by_name)}")
+        numbers = dict(system.defaults) | {by_name[str(s)]: v for s, v in given.items()}
+        self.system = self.chain = system
+        self.n = system.n
+        self.forced = system.forced
+        self._fn = compiled_system(system)
+        self._params = tuple(numbers[s] for s in system.parameters)
+        self._period = None if period is None else float(period)
+
+    #: Its coordinates may be lengths or positions: never reduced by whole turns.
+    periodic_coordinates = False
+
+    # ---- what the driver asks ------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self.system.name
+
+    @property
+    def is_conservative(self) -> bool:
+        """No forces besides the Lagrangian's (no dissipation)."""
+        return not self.system.forced
+
+    @property
+    def is_autonomous(self) -> bool:
+        return self.system.autonomous
+
+    @property
+    def drive_period(self):
+        return self._period
+
+    @property
+    def conformal_damping_rate(self):
+        """0 without forces; None with (the integrators' conformal methods do not apply)."""
+        return 0.0 if self.is_conservative else None
+
+    @property
+    def separable(self) -> bool:
+        return self.system.separable
+
+    @property
+    def damping(self) -> str:
+        """The system's forces, in words (for the messages that name a model's damping)."""
+        return "none" if self.is_conservative else "Q = " + str(list(
+            self.system.generalized_forces))
+
+    @property
+    def parameter_values(self) -> dict:
+        return dict(zip(self.system.parameters, self._params))
+
+    def kernels(self):
+        """The compiled kernels of the system's Hamilton equations (generated on first use)."""
+        return load_system_kernels(self.system)
+
+    def replace(self, **changes) -> SystemModel:
+        """A copy with some parameter values changed (by name)."""
+        return SystemModel(self.system, dict(zip(map(str, self.system.parameters),
+                                                 self._params)) | changes, period=self._period)
+
+    def family(self, **values):
+        raise TypeError(f"a family of {self.system.name} is not supported yet: run the models "
+                        "one by one (model.replace(...))")
+
+    def __reduce__(self):
+        return SystemModel, (self.system, dict(zip(map(str, self.system.parameters),
+                                                   self._params))), {"_period": self._period}
+
+    # ---- numeric functions, each with the time ----------------------------------------
+    def _time(self, t):
+        if t is None:
+            if not self.is_autonomous:
+                raise ValueError(f"`t` is required: the equations of {self.system.name} "
+                                 "depend on the time")
+            return 0.0
+        t = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(t)):
+            raise ValueError("`t` must be finite")
+        return t
+
+    def _states(self, name: str, value) -> np.ndarray:
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(f"`{name}` must be an array of real numbers of shape (..., "
+                            f"{self.n})") from None
+        if array.ndim == 0 or array.shape[-1] != self.n:
+            raise ValueError(f"`{name}` must have shape (..., {self.n}) for "
+                             f"{self.system.name} ({self.n} coordinates: "
+                             f"{', '.join(map(str, self.system.q))}), got shape {array.shape}")
+        return array
+
+    def mass_matrix_at(self, theta, t=None) -> np.ndarray:
+        return self._fn.mass_matrix(self._states("theta", theta), self._params, self._time(t))
+
+    def accelerations(self, theta, omega, t=None) -> np.ndarray:
+        return self._fn.accelerations(self._states("theta", theta), self._states("omega", omega),
+                                      self._params, self._time(t))
+
+    def generalized_forces(self, theta, omega, t=None) -> np.ndarray:
+        return self._fn.generalized_forces(self._states("theta", theta),
+                                           self._states("omega", omega), self._params,
+                                           self._time(t))
+
+    def momenta(self, theta, omega, t=None) -> np.ndarray:
+        """``p = M(q, t) omega + b(q, t)``."""
+        return self._fn.momenta(self._states("theta", theta), self._states("omega", omega),
+                                self._params, self._time(t))
+
+    def velocities(self, theta, p, t=None) -> np.ndarray:
+        """``omega = M(q, t)^-1 (p - b(q, t))`` (this is ``dH/dp``)."""
+        return self._fn.velocities(self._states("theta", theta), self._states("p", p),
+                                   self._params, self._time(t))
+
+    def vector_field(self, theta, p, t=None):
+        theta, t = self._states("theta", theta), self._time(t)
+        omega = self.velocities(theta, p, t)
+        return omega, (self._fn.dlagrangian_dq(theta, omega, self._params, t)
+                       + self._fn.generalized_forces(theta, omega, self._params, t))
+
+    def kinetic_energy(self, theta, omega, t=None) -> np.ndarray:
+        """``T``: the points' kinetic energy (for a moving pivot, in the fixed frame)."""
+        return self._fn.kinetic(self._states("theta", theta), self._states("omega", omega),
+                                self._params, self._time(t))
+
+    def potential_energy(self, theta, t=None) -> np.ndarray:
+        return self._fn.potential(self._states("theta", theta), self._params, self._time(t))
+
+    def energy(self, theta, omega, t=None) -> np.ndarray:
+        return self.kinetic_energy(theta, omega, t) + self.potential_energy(theta, t)
+
+    def dH_dp(self, theta, p, t=None) -> np.ndarray:
+        return self.velocities(theta, p, t)
+
+    def dH_dq(self, theta, p, t=None) -> np.ndarray:
+        theta, t = self._states("theta", theta), self._time(t)
+        return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p, t), self._params, t)
+
+    def hamiltonian_value(self, theta, p, t=None) -> np.ndarray:
+        """``H = 1/2 omega^T M omega - L(q, 0, t)`` at ``omega = M^-1 (p - b)``; equal to
+        ``T + V`` unless the pivot moves."""
+        theta, t = self._states("theta", theta), self._time(t)
+        omega = self.velocities(theta, p, t)
+        mass = self._fn.mass_matrix(theta, self._params, t)
+        quadratic = 0.5 * np.einsum("...i,...ij,...j->...", omega, mass, omega)
+        return quadratic - self._fn.lagrangian_rest(theta, self._params, t)
+
+    def jacobian(self, theta, p, t=None) -> np.ndarray:
+        """Jacobian of :meth:`vector_field` with respect to ``(q, p)``, shape ``(..., 2n, 2n)``."""
+        theta, t = self._states("theta", theta), self._time(t)
+        mass = self._fn.mass_matrix(theta, self._params, t)
+        omega = self.velocities(theta, p, t)
+        args = (theta, omega, self._params, t)
+        inv_mass = np.linalg.inv(mass)
+        dw_dq = -inv_mass @ self._fn.dmomenta_dq(*args)
+        rate_w = self._fn.rate_w(*args)
+        top = np.concatenate([dw_dq, inv_mass], axis=-1)
+        bottom = np.concatenate([self._fn.rate_q(*args) + rate_w @ dw_dq, rate_w @ inv_mass],
+                                -1)
+        return np.concatenate([top, bottom], axis=-2)
+
+    def positions(self, theta, t=None) -> tuple[np.ndarray, np.ndarray]:
+        """Cartesian positions ``(x, y)`` of the points, each shape ``(..., points)``."""
+        if not self._fn.points:
+            raise ValueError(f"{self.system.name} was given by its Lagrangian: it has no points")
+        xy = self._fn.positions(self._states("theta", theta), self._params, self._time(t))
+        return xy[..., 0], xy[..., 1]
+
+    def __repr__(self) -> str:
+        values = ", ".join(f"{s}={v:g}" for s, v in self.parameter_values.items())
+        return f"SystemModel({self.system.name!r}, {values})"
+
+
+def mechanical_system(coordinates, parameters, *, points=None, masses=None, gravity=None,
+                      potential=0, lagrangian=None, velocities=None, dissipation=0,
+                      forces=None, joints=None, name: str = "a mechanical system",
+                      period: float | None = None) -> SystemModel:
+    """A model of any holonomic system: from its points (or its Lagrangian) to ``simulate``.
+
+    The arguments are those of :class:`~pendulum_lab.symbolic.systems.MechanicalSystem`
+    (``coordinates``, ``parameters`` with default values, ``points`` with ``masses``,
+    ``gravity``, ``potential``, or a ``lagrangian``; ``dissipation``, ``forces``), plus
+    ``period``, the period of a time dependence, if any.
+
+    Examples
+    --------
+    >>> import sympy as sp, pendulum_lab as pl
+    >>> x, th = sp.symbols("x theta", real=True)
+    >>> m, l, g = sp.symbols("m l g", positive=True)
+    >>> model = pl.mechanical_system([th], {m: 1.0, l: 2.0, g: 9.81},
+    ...                              points=[(l * sp.sin(th), -l * sp.cos(th))], masses=[m],
+    ...                              gravity=g, name="a pendulum")
+    >>> float(model.accelerations([np.pi / 2], [0.0])[0])
+    -4.905
+    """
+    system = MechanicalSystem(coordinates, parameters, points=points, masses=masses,
+                              gravity=gravity, potential=potential, lagrangian=lagrangian,
+                              velocities=velocities, dissipation=dissipation, forces=forces,
+                              joints=joints, name=name)
+    return SystemModel(system, period=period)
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+            math.isfinite(value) and value > 0):
+        raise ValueError(f"`{name}` must be a positive finite number, got {value!r}")
+    return float(value)
+
+
+def elastic_pendulum(mass: float = 1.0, stiffness: float = 4 * 9.81,
+                     rest_length: float = 0.75, g: float = 9.81) -> SystemModel:
+    """A mass on a spring that swings in a plane: coordinates ``(r, theta)``.
+
+    ``r`` is the spring's length, ``theta`` its angle from the downward vertical; the
+    spring's potential is ``k (r - l_0)^2 / 2``. At rest ``r* = l_0 + m g / k``; the
+    stretching mode has ``omega_r^2 = k / m``, the swinging mode ``omega_theta^2 = g / r*``.
+    The defaults put them in 2:1 resonance (``omega_r = 2 omega_theta``: ``k r* = 4 m g``
+    with ``r* = 1``), where energy swings between the two modes.
+    """
+    r, th = sp.symbols("r theta", real=True)
+    m, k, l0, grav = sp.symbols("m k l_0 g", positive=True)
+    values = {m: _positive("mass", mass), k: _positive("stiffness", stiffness),
+              l0: _positive("rest_length", rest_length), grav: _positive("g", g)}
+    return mechanical_system([r, th], values, points=[(r * sp.sin(th), -r * sp.cos(th))],
+                             masses=[m], gravity=grav, potential=k * (r - l0) ** 2 / 2,
+                             joints=[(-1, 0)], name="the elastic pendulum")
+
+
+def kapitza_pendulum(amplitude: float = 0.05, frequency: float = 100.0, mass: float = 1.0,
+                     length: float = 1.0, g: float = 9.81) -> SystemModel:
+    """A pendulum whose pivot is shaken vertically: pivot at ``(0, a cos(w t))``.
+
+    ``theta`` from the downward vertical. The inverted position ``theta = pi`` is stable
+    (Kapitza) when ``a^2 w^2 > 2 g l``; averaged over the fast shaking the motion sees the
+    potential ``-m g l cos(theta) + m a^2 w^2 sin(theta)^2 / 4``.
+    """
+    th = sp.Symbol("theta", real=True)
+    a, w, m, rod, grav = sp.symbols("a w m l g", positive=True)
+    t = sp.Symbol("t", real=True)
+    values = {a: _positive("amplitude", amplitude), w: _positive("frequency", frequency),
+              m: _positive("mass", mass), rod: _positive("length", length),
+              grav: _positive("g", g)}
+    pivot_y = a * sp.cos(w * t)
+    bob = (rod * sp.sin(th), pivot_y - rod * sp.cos(th))
+    return mechanical_system([th], values, points=[bob],
+                             masses=[m], gravity=grav, joints=[(-1, 0)],
+                             name="the Kapitza pendulum", period=2 * math.pi / frequency)
+
+
+def cart_pendulum(cart_mass: float = 1.0, mass: float = 0.5, length: float = 1.0,
+                  g: float = 9.81) -> SystemModel:
+    """A pendulum hanging from a cart that rolls freely on a horizontal rail.
+
+    Coordinates ``(x, theta)``: the cart's position and the rod's angle from the downward
+    vertical. Two points: the cart at ``(x, 0)`` and the bob at
+    ``(x + l sin(theta), -l cos(theta))``.
+    """
+    x, th = sp.symbols("x theta", real=True)
+    big_m, m, rod, grav = sp.symbols("M m l g", positive=True)
+    values = {big_m: _positive("cart_mass", cart_mass), m: _positive("mass", mass),
+              rod: _positive("length", length), grav: _positive("g", g)}
+    bob = (x + rod * sp.sin(th), -rod * sp.cos(th))
+    return mechanical_system([x, th], values, points=[(x, sp.Integer(0)), bob],
+                             masses=[big_m, m], gravity=grav, joints=[(0, 1)],
+                             name="the pendulum on a cart")
