@@ -302,12 +302,16 @@ class PendulumModel:
         return self._fn.separable
 
     # ---- numeric functions -------------------------------------------------
+    def _described(self) -> tuple[str, str]:
+        """How error messages name the model (its coordinates) and why it needs ``t``."""
+        return (f"a model with {self.n} link(s)",
+                "the model is driven, so its equations depend on the time")
+
     def _time(self, t):
         """``t`` as floats; it may be left out only when the equations do not depend on it."""
         if t is None:
             if not self.is_autonomous:
-                raise ValueError("`t` is required: the model is driven, so its equations "
-                                 "depend on the time")
+                raise ValueError(f"`t` is required: {self._described()[1]}")
             return 0.0
         t = np.asarray(t, dtype=float)
         if not np.all(np.isfinite(t)):
@@ -322,8 +326,8 @@ class PendulumModel:
             raise TypeError(f"`{name}` must be an array of real numbers of shape (..., "
                             f"{self.n})") from None
         if array.ndim == 0 or array.shape[-1] != self.n:
-            raise ValueError(f"`{name}` must have shape (..., {self.n}) for a model with "
-                             f"{self.n} link(s), got shape {array.shape}")
+            raise ValueError(f"`{name}` must have shape (..., {self.n}) for "
+                             f"{self._described()[0]}, got shape {array.shape}")
         return array
 
     def mass_matrix_at(self, theta) -> np.ndarray:

@@ -130,28 +130,10 @@ class SystemModel(PendulumModel):
                                                    self._params))), {"_period": self._period}
 
     # ---- numeric functions, each with the time ----------------------------------------
-    def _time(self, t):
-        if t is None:
-            if not self.is_autonomous:
-                raise ValueError(f"`t` is required: the equations of {self.system.name} "
-                                 "depend on the time")
-            return 0.0
-        t = np.asarray(t, dtype=float)
-        if not np.all(np.isfinite(t)):
-            raise ValueError("`t` must be finite")
-        return t
-
-    def _states(self, name: str, value) -> np.ndarray:
-        try:
-            array = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise TypeError(f"`{name}` must be an array of real numbers of shape (..., "
-                            f"{self.n})") from None
-        if array.ndim == 0 or array.shape[-1] != self.n:
-            raise ValueError(f"`{name}` must have shape (..., {self.n}) for "
-                             f"{self.system.name} ({self.n} coordinates: "
-                             f"{', '.join(map(str, self.system.q))}), got shape {array.shape}")
-        return array
+    def _described(self) -> tuple[str, str]:
+        coordinates = ", ".join(map(str, self.system.q))
+        return (f"{self.system.name} ({self.n} coordinates: {coordinates})",
+                f"the equations of {self.system.name} depend on the time")
 
     def mass_matrix_at(self, theta, t=None) -> np.ndarray:
         return self._fn.mass_matrix(self._states("theta", theta), self._params, self._time(t))
