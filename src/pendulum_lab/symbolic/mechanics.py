@@ -86,8 +86,10 @@ __all__ = [
     "Equilibrium",
     "LagrangianDerivation",
     "derive_chain",
+    "hamilton_equations_of",
     "is_identically_zero",
     "lagrangian_derivation",
+    "legendre_transform_of",
 ]
 
 #: Chains up to this many links get their entries expanded into the terms the
@@ -470,14 +472,11 @@ class Chain:
 
         ``Q`` (zero unless forced) is written in ``p`` through ``omega = dH/dp``.
         """
-        h = self.hamiltonian
-        dq = sp.Matrix([h.diff(pi) for pi in self.p])
-        forces = self.generalized_forces.xreplace(dict(zip(self.omega, dq)))
-        return dq, sp.Matrix([-h.diff(qi) for qi in self.q]) + forces
+        return hamilton_equations_of(self)
 
     def legendre_transform(self) -> sp.Expr:
         """``omega . p - L`` written in ``(q, omega)``; it equals ``T + V``."""
-        return sp.expand((self.omega.T * self.momenta)[0, 0] - self.lagrangian)
+        return legendre_transform_of(self)
 
     # ---- equilibria --------------------------------------------------------
     @functools.cached_property
@@ -640,6 +639,21 @@ def lagrangian_derivation(chain: Chain) -> LagrangianDerivation:
         forces[0] += chain.drive_amplitude * sp.cos(chain.drive_frequency * chain.t)
     forcing = sp.expand(conservative + forces)
     return LagrangianDerivation(kinetic, potential, mass, dl_dq, sp.expand(forces), forcing)
+
+
+def hamilton_equations_of(system) -> tuple[sp.Matrix, sp.Matrix]:
+    """``(dH/dp, -dH/dq + Q)`` of a system with ``hamiltonian``, ``q``, ``p``, ``omega`` and
+    ``generalized_forces`` (a :class:`Chain` or a ``MechanicalSystem``); ``Q`` is written in
+    ``p`` through ``omega = dH/dp``."""
+    h = system.hamiltonian
+    dq = sp.Matrix([h.diff(pi) for pi in system.p])
+    forces = system.generalized_forces.xreplace(dict(zip(system.omega, dq)))
+    return dq, sp.Matrix([-h.diff(qi) for qi in system.q]) + forces
+
+
+def legendre_transform_of(system) -> sp.Expr:
+    """``omega . p - L`` of a system in ``(q, omega)``, from its ``momenta`` and ``lagrangian``."""
+    return sp.expand((system.omega.T * system.momenta)[0, 0] - system.lagrangian)
 
 
 def is_identically_zero(expr: sp.Expr) -> bool:

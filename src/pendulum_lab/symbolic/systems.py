@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
-from .mechanics import Equilibrium, derive_chain
+from .mechanics import Equilibrium, derive_chain, hamilton_equations_of, legendre_transform_of
 
 __all__ = [
     "MechanicalSystem",
@@ -383,14 +383,11 @@ class MechanicalSystem:
     @functools.cached_property
     def hamilton_equations(self) -> tuple[sp.Matrix, sp.Matrix]:
         """``(dq/dt, dp/dt) = (dH/dp, -dH/dq + Q)``, ``Q`` at ``q' = dH/dp``."""
-        h = self.hamiltonian
-        dq = sp.Matrix([h.diff(pi) for pi in self.p])
-        forces = self.generalized_forces.xreplace(dict(zip(self.omega, dq)))
-        return dq, sp.Matrix([-h.diff(qi) for qi in self.q]) + forces
+        return hamilton_equations_of(self)
 
     def legendre_transform(self) -> sp.Expr:
         """``q' . p - L`` in ``(q, q')``: ``1/2 q'^T M q' - L_0``."""
-        return sp.expand((self.omega.T * self.momenta)[0, 0] - self.lagrangian)
+        return legendre_transform_of(self)
 
     # ---- equilibria ----------------------------------------------------------------
     def _require_autonomous(self, what: str) -> None:
