@@ -58,3 +58,17 @@ def test_set_controls_names_the_control_and_its_choices():
     with pytest.raises(ValueError, match="`method` must be one of .*'rk4'.*got 'foo'"):
         explorer.set_controls({"method": "foo"})
     assert explorer.set_controls({"method": "rk4"})  # negative control: a listed choice runs
+
+
+@pytest.mark.parametrize("build", [
+    lambda model: widgets.live_simulator(model, [1.0, 0.5], [0.0, 0.0]),
+    lambda model: animation.simulator(model),
+    lambda model: widgets.section_explorer(model),
+], ids=["live_simulator", "animation.simulator", "section_explorer"])
+def test_the_drawings_refuse_a_system_given_by_its_points_and_say_so(build):
+    # A SystemModel has no rods to draw: a TypeError that says what the model is, not an
+    # AttributeError from inside the drawing code; a chain of two links builds (the control).
+    with pytest.raises(TypeError, match="not a chain|a chain of two links") as refused:
+        build(pl.elastic_pendulum())
+    assert "the elastic pendulum" in str(refused.value)
+    build(pl.double_pendulum())

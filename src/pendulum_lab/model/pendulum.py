@@ -166,6 +166,8 @@ class PendulumModel:
     #: Every coordinate is an angle the equations are 2 pi-periodic in (so the driver may
     #: reduce large initial angles by whole turns); False for a ``SystemModel``.
     periodic_coordinates: bool = True
+    #: A planar chain of rods (a ``SystemModel``, given by its points or Lagrangian, is not).
+    is_chain: bool = True
 
     #: Shape of the parameters: ``()`` for one model; a
     #: :class:`~pendulum_lab.model.ModelFamily` has one model per entry.
@@ -701,6 +703,8 @@ def require_model(model, name: str = "model") -> PendulumModel:
 def require_double_pendulum(model) -> PendulumModel:
     """``model`` itself if it is a :class:`PendulumModel` with two links."""
     require_model(model)
+    if not model.is_chain:
+        raise TypeError(f"`model` must be a double pendulum (a chain of two links), got {model!r}")
     if model.n != 2:
         raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
     return model

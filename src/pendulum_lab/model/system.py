@@ -74,6 +74,21 @@ class SystemModel(PendulumModel):
 
     #: Its coordinates may be lengths or positions: never reduced by whole turns.
     periodic_coordinates = False
+    is_chain = False
+
+    # ---- what only a chain has: a clear refusal where a chain's tool asks for it -----------
+    def _chain_only(self, attribute: str):
+        raise TypeError(
+            f"{self.system.name} is a system given by its points or its Lagrangian, not a chain "
+            f"of rods, so it has no `{attribute}`: pl.simulate, pl.step, every method that "
+            "applies, chaos.poincare_section and the symplecticity checks accept it; the "
+            "drawings, the animations, the explorers and the live simulator draw chains only")
+
+    lengths = property(lambda self: self._chain_only("lengths"))
+    masses = property(lambda self: self._chain_only("masses"))
+    g = property(lambda self: self._chain_only("g"))
+    drive_amplitude = property(lambda self: self._chain_only("drive_amplitude"))
+    drive_frequency = property(lambda self: self._chain_only("drive_frequency"))
 
     # ---- what the driver asks ------------------------------------------------------
     @property

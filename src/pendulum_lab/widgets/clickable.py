@@ -46,7 +46,7 @@ from matplotlib.figure import Figure
 from .. import chaos, plotting
 from .. import validation as check
 from ..driver.simulate import time_grid
-from ..model import require_model
+from ..model import require_double_pendulum, require_model
 from ..model.pendulum import PendulumModel
 from ..plotting.png import png_bytes
 from .calls import SimulateCall, model_code
@@ -487,9 +487,7 @@ def section_explorer(
     >>> len(ex.orbits), ex.message.startswith("No orbit launched")
     (1, True)
     """
-    model = require_model(model)
-    if model.n != 2:
-        raise ValueError(f"`model` must be a double pendulum (n = 2), got n = {model.n}")
+    model = require_double_pendulum(model)
     if not energy_is_conserved(model):
         raise ValueError(
             "`model` must have no damping and no drive: section_explorer launches orbits on one "
