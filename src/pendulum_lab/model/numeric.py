@@ -148,8 +148,6 @@ def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return np.linalg.solve(matrix, rhs[..., None])[..., 0]
 
 
-
-
 class CompiledSystem:
     """The lambdified functions of a :class:`~pendulum_lab.symbolic.systems.MechanicalSystem`.
 

@@ -383,14 +383,14 @@ class PendulumModel:
         return self._fn.potential(self._states("theta", theta), self._params)
 
     def energy(self, theta, omega, t=None) -> np.ndarray:
-        return self.kinetic_energy(theta, omega) + self.potential_energy(theta)
+        return self.kinetic_energy(theta, omega, t) + self.potential_energy(theta, t)
 
     # Hamilton's equations in canonical variables. dH/dq at fixed p equals
     # -dL/dq at omega = M^-1 p (a property of the Legendre transform), which
     # avoids differentiating a symbolic inverse. H is the mechanical energy:
     # the forces Q of a forced model are not in it (see vector_field).
-    def dH_dp(self, theta, p) -> np.ndarray:
-        return self.velocities(theta, p)
+    def dH_dp(self, theta, p, t=None) -> np.ndarray:
+        return self.velocities(theta, p, t)
 
     def dH_dq(self, theta, p) -> np.ndarray:
         theta = self._states("theta", theta)

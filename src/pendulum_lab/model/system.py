@@ -186,12 +186,6 @@ class SystemModel(PendulumModel):
     def potential_energy(self, theta, t=None) -> np.ndarray:
         return self._fn.potential(self._states("theta", theta), self._params, self._time(t))
 
-    def energy(self, theta, omega, t=None) -> np.ndarray:
-        return self.kinetic_energy(theta, omega, t) + self.potential_energy(theta, t)
-
-    def dH_dp(self, theta, p, t=None) -> np.ndarray:
-        return self.velocities(theta, p, t)
-
     def dH_dq(self, theta, p, t=None) -> np.ndarray:
         theta, t = self._states("theta", theta), self._time(t)
         return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p, t), self._params, t)
