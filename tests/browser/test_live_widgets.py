@@ -143,7 +143,7 @@ def numbers_in(text: str, *names: str) -> list[float]:
 
 def test_the_demo_runs_cleanly(lab, page):
     _, run, _ = lab
-    assert page.locator(SIM).count() == 1 and page.locator(CLICK).count() == 2
+    assert page.locator(SIM).count() == 3 and page.locator(CLICK).count() == 2
     # 60 s at 10 ms: 6001 states, sent in two chunks of at most 4096.
     assert data(page, SIM)["chunks"] == "2"
     page.locator(SIM).first.scroll_into_view_if_needed()
@@ -367,6 +367,89 @@ def test_a_drag_beyond_the_chain_is_clamped(page):
     assert after["θ₂ (rad)"] == f"{expected:.3f}"
     status = page.locator(f"{SIM} .plab-status").first
     assert status.get_attribute("data-kind") != "error", status.text_content()
+
+
+ELASTIC, KAPITZA = 1, 2  # the live simulators of the systems given by their points
+
+
+def paused_at_start(page, index: int) -> dict:
+    """Pause simulator ``index`` at its first state once its run is in; its data attributes."""
+    page.locator(SIM).nth(index).scroll_into_view_if_needed()
+    page.evaluate("(k) => document.querySelectorAll('.plab-live')[k].focus()", index)
+    page.keyboard.press("Home")
+    wait_data(page, SIM, "playing", "v === '0'", index)
+    wait_data(page, SIM, "time", "Number(v) === 0", index)
+    return data(page, SIM, index)
+
+
+def drawn_points(state: dict) -> list[tuple[float, float]]:
+    return [tuple(float(c) for c in pair.split()) for pair in state["points"].split(",")]
+
+
+def kernel_positions(page, name: str) -> list[list[float]]:
+    """The points of simulator ``name``'s model at its run's first state, from the kernel."""
+    return json.loads(kernel_output(page, (
+        f"import json, numpy as np; m = {name}.model; q = {name}.trajectory.theta[0]; "
+        "print(json.dumps(np.stack(m.positions(q, 0.0), -1).tolist()))")))
+
+
+def point_pixel(page, index: int, state: dict, point: int) -> tuple[float, float]:
+    x0, y0 = (page.locator(f"{SIM} canvas").nth(index).bounding_box()[k] for k in ("x", "y"))
+    x, y = drawn_points(state)[point]
+    scale = float(state["scale"])
+    return x0 + PIVOT[0] + scale * x, y0 + PIVOT[1] - scale * y
+
+
+def test_a_system_is_drawn_at_the_points_the_kernel_computes(page):
+    wait_data(page, SIM, "states", "v === '1001'", ELASTIC)
+    state = paused_at_start(page, ELASTIC)
+    drawn = drawn_points(state)
+    expected = kernel_positions(page, "elastic")
+    assert len(drawn) == len(expected) == 1
+    assert drawn[0] == pytest.approx(expected[0], abs=1e-4)  # float32 on the way
+    # Control: the drawing is not the chain's (a unit rod at the first coordinate's angle).
+    theta = [float(v) for v in state["theta"].split(",")]
+    assert math.dist(drawn[0], (math.sin(theta[0]), -math.cos(theta[0]))) > 0.1
+
+
+def test_dragging_a_systems_point_places_its_coordinates_there(page):
+    state = paused_at_start(page, ELASTIC)
+    run_before = int(state["run"])
+    start = point_pixel(page, ELASTIC, state, 0)
+    to = (start[0] + 45.0, start[1] + 30.0)
+    page.mouse.move(*start)
+    page.mouse.down()
+    for k in range(1, 6):
+        f = k / 5
+        page.mouse.move(start[0] + f * (to[0] - start[0]), start[1] + f * (to[1] - start[1]))
+    page.mouse.up()
+    wait_data(page, SIM, "run", f"Number(v) === {run_before + 1}", ELASTIC)
+    x, y = (float(v) for v in data(page, SIM, ELASTIC)["release"].split(","))
+    # The kernel's new start puts the bob where it was released, at rest.
+    assert kernel_positions(page, "elastic")[0] == pytest.approx([x, y], abs=1e-7)
+    assert json.loads(kernel_output(page, "print(elastic.trajectory.omega[0].tolist())")) == [
+        0.0, 0.0]
+
+
+def test_dragging_a_shaken_pivot_is_refused_with_a_sentence(page):
+    wait_data(page, SIM, "states", "v === '501'", KAPITZA)
+    state = paused_at_start(page, KAPITZA)
+    run_before = int(state["run"])
+    pivot = point_pixel(page, KAPITZA, state, 0)
+    page.mouse.move(*pivot)
+    page.mouse.down()
+    page.mouse.up()
+    wait_data(page, SIM, "refused", "v === '0'", KAPITZA)
+    status = page.locator(f"{SIM} .plab-status").nth(KAPITZA)
+    assert "does not move with the coordinates" in status.text_content()
+    assert int(data(page, SIM, KAPITZA)["run"]) == run_before  # nothing was recomputed
+    # Control: the bob of the same simulator can be dragged.
+    bob = point_pixel(page, KAPITZA, state, 1)
+    page.mouse.move(*bob)
+    page.mouse.down()
+    page.mouse.move(bob[0] + 30.0, bob[1])
+    page.mouse.up()
+    wait_data(page, SIM, "run", f"Number(v) === {run_before + 1}", KAPITZA)
 
 
 def frame_pixel(page, index: int, x: float, y: float) -> tuple[float, float]:

@@ -53,7 +53,7 @@ SURFACE = {
     ),
     "plotting": (
         "KINETIC", "LIBRATION", "PANELS", "POTENTIAL", "QUANTITIES", "ROTATION", "SEPARATRIX",
-        "TOTAL", "axis_label", "chain_frame", "draw_pendulum", "get_axes", "get_axes_grid",
+        "TOTAL", "axis_label", "draw_pendulum", "drawing_frame", "get_axes", "get_axes_grid",
         "link_label", "new_figure", "plot_adaptive_energy", "plot_amplification", "plot_angles",
         "plot_area_ratio", "plot_basins", "plot_bifurcation", "plot_carried_loops", "plot_energy",
         "plot_energy_comparison", "plot_energy_decay", "plot_energy_drift", "plot_energy_error",

@@ -10,6 +10,7 @@ factories of the elastic, the Kapitza and the cart pendulum.
 from .angles import reduce_turns, wrap_angle
 from .pendulum import (
     FAMILY_PARAMETERS,
+    Drawing,
     ModelFamily,
     PendulumModel,
     double_pendulum,
@@ -28,6 +29,7 @@ from .system import (
 )
 
 __all__ = [
+    "Drawing",
     "FAMILY_PARAMETERS",
     "ModelFamily",
     "PendulumModel",

@@ -20,10 +20,11 @@ import math
 import numpy as np
 import sympy as sp
 
+from .. import validation as check
 from ..codegen.kernels import load_system_kernels
 from ..symbolic.systems import MechanicalSystem, parameter_values
 from .numeric import compiled_system
-from .pendulum import PendulumModel
+from .pendulum import Drawing, PendulumModel
 
 __all__ = [
     "SystemModel",
@@ -45,6 +46,12 @@ class SystemModel(PendulumModel):
     period : float, optional
         The period of the time dependence [s] (a shaken pivot's), for messages about
         rounded times.
+    start : sequence of float, optional
+        The coordinates the simulators and explorers start from by default (zeros if not
+        given); the velocities start at zero.
+    factory : str, optional
+        The call that builds the system (``"pl.elastic_pendulum()"``), for the code an
+        instrument copies; None for a system built by :func:`mechanical_system`.
 
     Attributes
     ----------
@@ -55,7 +62,7 @@ class SystemModel(PendulumModel):
     """
 
     def __init__(self, system: MechanicalSystem, values: dict | None = None, *,
-                 period: float | None = None):
+                 period: float | None = None, start=None, factory: str | None = None):
         if not isinstance(system, MechanicalSystem):
             raise TypeError(f"`system` must be a MechanicalSystem, got {type(system).__name__}")
         given = parameter_values({} if values is None else values)
@@ -71,6 +78,9 @@ class SystemModel(PendulumModel):
         self._fn = compiled_system(system)
         self._params = tuple(numbers[s] for s in system.parameters)
         self._period = None if period is None else float(period)
+        self.start = (np.zeros(self.n) if start is None
+                      else check.state_vector("start", start, self.n))
+        self.factory = factory
 
     #: Its coordinates may be lengths or positions: never reduced by whole turns.
     periodic_coordinates = False
@@ -81,8 +91,8 @@ class SystemModel(PendulumModel):
         raise TypeError(
             f"{self.system.name} is a system given by its points or its Lagrangian, not a chain "
             f"of rods, so it has no `{attribute}`: pl.simulate, pl.step, every method that "
-            "applies, chaos.poincare_section and the symplecticity checks accept it; the "
-            "drawings, the animations, the explorers and the live simulator draw chains only")
+            "applies, the explorers and the drawings accept it (they read `model.drawing` and "
+            "`model.positions`); the tools written for a chain's rods refuse it")
 
     lengths = property(lambda self: self._chain_only("lengths"))
     masses = property(lambda self: self._chain_only("masses"))
@@ -131,10 +141,22 @@ class SystemModel(PendulumModel):
         """The compiled kernels of the system's Hamilton equations (generated on first use)."""
         return load_system_kernels(self.system)
 
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        """The coordinates' names as people read them (``θ``, ``r``, ``x``, ``l₀``)."""
+        return tuple(sp.pretty(qi, use_unicode=True) for qi in self.system.q)
+
+    @property
+    def angle_coordinates(self) -> tuple[bool, ...]:
+        """For each coordinate, whether it is an angle (the description depends on it only
+        through its sine and cosine): the sliders offer angles in ``[-pi, pi]`` rad."""
+        return self.system.angle_coordinates
+
     def replace(self, **changes) -> SystemModel:
         """A copy with some parameter values changed (by name)."""
         return SystemModel(self.system, dict(zip(map(str, self.system.parameters),
-                                                 self._params)) | changes, period=self._period)
+                                                 self._params)) | changes, period=self._period,
+                           start=self.start, factory=self.factory)
 
     def family(self, **values):
         raise TypeError(f"a family of {self.system.name} is not supported yet: run the models "
@@ -142,7 +164,8 @@ class SystemModel(PendulumModel):
 
     def __reduce__(self):
         return SystemModel, (self.system, dict(zip(map(str, self.system.parameters),
-                                                   self._params))), {"_period": self._period}
+                                                   self._params))), {
+            "_period": self._period, "start": self.start, "factory": self.factory}
 
     # ---- numeric functions, each with the time ----------------------------------------
     def _described(self) -> tuple[str, str]:
@@ -215,10 +238,79 @@ class SystemModel(PendulumModel):
 
     def positions(self, theta, t=None) -> tuple[np.ndarray, np.ndarray]:
         """Cartesian positions ``(x, y)`` of the points, each shape ``(..., points)``."""
-        if not self._fn.points:
-            raise ValueError(f"{self.system.name} was given by its Lagrangian: it has no points")
+        self._require_points()
         xy = self._fn.positions(self._states("theta", theta), self._params, self._time(t))
         return xy[..., 0], xy[..., 1]
+
+    def _require_points(self) -> None:
+        if not self._fn.points:
+            raise TypeError(f"{self.system.name} was given by its Lagrangian, so it has no "
+                            "points to draw: pl.simulate, pl.step and the methods accept it; "
+                            "give `points` and `masses` to mechanical_system to draw it")
+
+    @property
+    def drawing(self) -> Drawing:
+        """The points (discs of area proportional to mass, a massless point as a small mark),
+        the rods and springs between them, and which points a drag can place."""
+        self._require_points()
+        values = self.parameter_values
+        masses = tuple(float(sp.sympify(m).xreplace(values)) for m in self.system.masses)
+        moved = set(self.system.q)
+        movable = tuple(
+            None if (sp.sympify(x).free_symbols | sp.sympify(y).free_symbols) & moved else
+            f"point {k} of {self.system.name} does not move with the coordinates (its motion "
+            "is prescribed), so dragging it cannot set them; drag a point the coordinates place"
+            for k, (x, y) in enumerate(self.system.points))
+        return Drawing(masses=masses, rods=tuple(self.system.joints),
+                       springs=tuple(self.system.springs), movable=movable)
+
+    def place_point(self, point: int, x: float, y: float, theta, t: float = 0.0) -> np.ndarray:
+        """The coordinates nearest ``theta`` that put point ``point`` at ``(x, y)`` [m] at
+        time ``t``.
+
+        Damped Gauss-Newton (Levenberg-Marquardt) on the point's position from ``theta``:
+        where the point's position fixes the coordinates (the elastic pendulum's bob), it
+        lands on ``(x, y)``; where it fixes fewer (the cart pendulum's cart sets ``x``, not
+        ``theta``), the others keep their values; a point that cannot reach ``(x, y)`` (a
+        rod does not stretch) stops at the nearest place it can.
+
+        Raises
+        ------
+        ValueError
+            For a point whose position does not depend on the coordinates
+            (``drawing.movable`` says why), or a place where the coordinates fail (a
+            singular mass matrix, such as ``r = 0`` of polar coordinates).
+        """
+        drawing = self.drawing
+        point = check.index_below("point", point, len(drawing.masses))
+        if drawing.movable[point] is not None:
+            raise ValueError(drawing.movable[point])
+        target = np.array([check.real_number("x", x), check.real_number("y", y)])
+        q = np.array(self._states("theta", theta), dtype=float)
+        t = check.real_number("t", t)
+
+        def place(coordinates):
+            xs, ys = self.positions(coordinates, t)
+            return np.array([xs[point], ys[point]])
+
+        damping = 1e-6
+        for _ in range(100):
+            miss = place(q) - target
+            steps = 1e-7 * (1.0 + np.abs(q))
+            jac = np.column_stack([(place(q + e) - place(q - e)) / (2 * h)
+                                   for e, h in zip(np.diag(steps), steps)])
+            normal = jac.T @ jac
+            scale = max(np.trace(normal), 1e-12)
+            step = np.linalg.solve(normal + damping * scale * np.eye(self.n), -jac.T @ miss)
+            q = q + step
+            if np.max(np.abs(step)) < 1e-12 * (1.0 + np.max(np.abs(q))):
+                break
+        matrix = self.mass_matrix_at(q, t)
+        if not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-12 * max(
+                1.0, np.max(np.abs(matrix)) ** self.n):
+            raise ValueError(f"at ({x:.3g}, {y:.3g}) m the coordinates of {self.system.name} "
+                             "fail (its mass matrix is singular there): release it elsewhere")
+        return q
 
     def __repr__(self) -> str:
         values = ", ".join(f"{s}={v:g}" for s, v in self.parameter_values.items())
@@ -227,14 +319,16 @@ class SystemModel(PendulumModel):
 
 def mechanical_system(coordinates, parameters, *, points=None, masses=None, gravity=None,
                       potential=0, lagrangian=None, velocities=None, dissipation=0,
-                      forces=None, joints=None, name: str = "a mechanical system",
-                      period: float | None = None) -> SystemModel:
+                      forces=None, joints=None, springs=None,
+                      name: str = "a mechanical system", period: float | None = None,
+                      start=None) -> SystemModel:
     """A model of any holonomic system: from its points (or its Lagrangian) to ``simulate``.
 
     The arguments are those of :class:`~pendulum_lab.symbolic.systems.MechanicalSystem`
     (``coordinates``, ``parameters`` with default values, ``points`` with ``masses``,
-    ``gravity``, ``potential``, or a ``lagrangian``; ``dissipation``, ``forces``), plus
-    ``period``, the period of a time dependence, if any.
+    ``gravity``, ``potential``, or a ``lagrangian``; ``dissipation``, ``forces``; the
+    ``joints`` drawn as rods and the ``springs``), plus ``period``, the period of a time
+    dependence, if any, and ``start``, the coordinates the simulators start from.
 
     Examples
     --------
@@ -250,8 +344,8 @@ def mechanical_system(coordinates, parameters, *, points=None, masses=None, grav
     system = MechanicalSystem(coordinates, parameters, points=points, masses=masses,
                               gravity=gravity, potential=potential, lagrangian=lagrangian,
                               velocities=velocities, dissipation=dissipation, forces=forces,
-                              joints=joints, name=name)
-    return SystemModel(system, period=period)
+                              joints=joints, springs=springs, name=name)
+    return SystemModel(system, period=period, start=start)
 
 
 def _positive(name: str, value) -> float:
@@ -275,9 +369,18 @@ def elastic_pendulum(mass: float = 1.0, stiffness: float = 4 * 9.81,
     m, k, l0, grav = sp.symbols("m k l_0 g", positive=True)
     values = {m: _positive("mass", mass), k: _positive("stiffness", stiffness),
               l0: _positive("rest_length", rest_length), grav: _positive("g", g)}
-    return mechanical_system([r, th], values, points=[(r * sp.sin(th), -r * sp.cos(th))],
-                             masses=[m], gravity=grav, potential=k * (r - l0) ** 2 / 2,
-                             joints=[(-1, 0)], name="the elastic pendulum")
+    model = mechanical_system([r, th], values, points=[(r * sp.sin(th), -r * sp.cos(th))],
+                              masses=[m], gravity=grav, potential=k * (r - l0) ** 2 / 2,
+                              springs=[(-1, 0)], name="the elastic pendulum")
+    rest = values[l0] + values[m] * values[grav] / values[k]
+    return _made_by(model, "elastic_pendulum", start=[1.2 * rest, 0.6])
+
+
+def _made_by(model: SystemModel, factory: str, start) -> SystemModel:
+    """``model`` with the simulators' start and the call that builds it named."""
+    model.start = np.asarray(start, dtype=float)
+    model.factory = f"pl.{factory}()"
+    return model
 
 
 def kapitza_pendulum(amplitude: float = 0.05, frequency: float = 100.0, mass: float = 1.0,
@@ -296,9 +399,11 @@ def kapitza_pendulum(amplitude: float = 0.05, frequency: float = 100.0, mass: fl
               grav: _positive("g", g)}
     pivot_y = a * sp.cos(w * t)
     bob = (rod * sp.sin(th), pivot_y - rod * sp.cos(th))
-    return mechanical_system([th], values, points=[bob],
-                             masses=[m], gravity=grav, joints=[(-1, 0)],
-                             name="the Kapitza pendulum", period=2 * math.pi / frequency)
+    # The pivot is a massless point, so that the drawings show it shaking.
+    model = mechanical_system([th], values, points=[(sp.Integer(0), pivot_y), bob],
+                              masses=[0, m], gravity=grav, joints=[(0, 1)],
+                              name="the Kapitza pendulum", period=2 * math.pi / frequency)
+    return _made_by(model, "kapitza_pendulum", start=[math.pi - 0.3])
 
 
 def cart_pendulum(cart_mass: float = 1.0, mass: float = 0.5, length: float = 1.0,
@@ -314,6 +419,7 @@ def cart_pendulum(cart_mass: float = 1.0, mass: float = 0.5, length: float = 1.0
     values = {big_m: _positive("cart_mass", cart_mass), m: _positive("mass", mass),
               rod: _positive("length", length), grav: _positive("g", g)}
     bob = (x + rod * sp.sin(th), -rod * sp.cos(th))
-    return mechanical_system([x, th], values, points=[(x, sp.Integer(0)), bob],
-                             masses=[big_m, m], gravity=grav, joints=[(0, 1)],
-                             name="the pendulum on a cart")
+    model = mechanical_system([x, th], values, points=[(x, sp.Integer(0)), bob],
+                              masses=[big_m, m], gravity=grav, joints=[(0, 1)],
+                              name="the pendulum on a cart")
+    return _made_by(model, "cart_pendulum", start=[0.0, 1.0])

@@ -7,8 +7,10 @@ and a test can inspect the artists under any backend. By topic:
 
 * :mod:`.figures`: new figures, the axes helpers, axis labels and link
   subscripts, colours;
-* :mod:`.trajectories`: energies, angles, phase space, the chain, the
+* :mod:`.trajectories`: energies, angles, phase space, the configuration, the
   explorers' :data:`PANELS`;
+* :mod:`.drawing`: a model's points, rods and springs as line data (every
+  drawing of a configuration, chains and systems alike);
 * :mod:`.methods`: observed order, energy error growth, work-precision,
   amplification of small swings (linear stability), the contraction of an
   implicit method's stage iteration, the decay of energy under damping;
@@ -33,6 +35,7 @@ from .chaos import (
     plot_separation,
     plot_small_angle,
 )
+from .drawing import drawing_frame
 from .driven import plot_basins, plot_bifurcation, plot_orbit_branches, plot_stroboscopic
 from .figures import (
     KINETIC,
@@ -77,7 +80,6 @@ from .methods import (
 )
 from .trajectories import (
     PANELS,
-    chain_frame,
     draw_pendulum,
     plot_angles,
     plot_energy,
@@ -102,8 +104,8 @@ __all__ = [
     "SEPARATRIX",
     "TOTAL",
     "axis_label",
-    "chain_frame",
     "draw_pendulum",
+    "drawing_frame",
     "get_axes",
     "get_axes_grid",
     "link_label",

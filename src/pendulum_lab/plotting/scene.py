@@ -22,9 +22,9 @@ from PIL import Image
 from .. import validation as check
 from ..driver.simulate import Trajectory, step_count
 from ..model import PendulumModel, require_model
+from .drawing import drawing_frame, joined_paths
 from .figures import KINETIC, POTENTIAL, TOTAL
 from .png import png_bytes
-from .trajectories import chain_frame
 
 __all__ = [
     "BOB_COLOUR",
@@ -169,10 +169,12 @@ def frame_indices(traj: Trajectory, fps: float, speed: float,
 
 
 class PendulumScene:
-    """The animated drawing of a trajectory: the chain and the energies up to now.
+    """The animated drawing of a trajectory: the model's configuration and the energies up to now.
 
-    Left: rods, bobs (area proportional to mass), pivot and the path of the
-    last bob over the past ``trail`` seconds. Right: kinetic, potential and
+    Left: rods, springs, bobs (one size for a chain's equal masses, smaller for lighter ones),
+    massless points (a shaken pivot) as small marks, the fixed pivot, and the path of the
+    last massive point over the past ``trail`` seconds (a chain and a system given by its
+    points, through :attr:`~pendulum_lab.PendulumModel.drawing`). Right: kinetic, potential and
     total energy from the start to the current time, over a faint line of the
     initial energy, and a readout of the time and the three energies.
     :meth:`show` moves everything to one saved state and returns the artists
@@ -214,7 +216,8 @@ class PendulumScene:
         The runs drawn; ``traj`` is the first.
     labels : list of str
     rods, bobs, trail_line : matplotlib.lines.Line2D
-        Those of the first run; ``chains`` holds ``(rods, bobs, trail_line)`` of each run.
+        Those of the first run; ``chains`` holds ``(rods, bobs, trail_line)`` of each run,
+        ``parts`` its ``(springs, pivots)`` (massless points).
     energy_lines : dict
         One run: ``"kinetic"``, ``"potential"``, ``"total"`` -> Line2D.
         Several: ``("kinetic", k)`` and ``("total", k)`` for run ``k``.
@@ -243,8 +246,12 @@ class PendulumScene:
                 )
         trail = check.non_negative_number("trail", trail)
         self.model, self.runs, self.traj = model, runs, runs[0]
-        self._positions = [model.positions(run.theta) for run in runs]
+        self._positions = [model.positions(run.theta, run.t) for run in runs]
         self.x, self.y = self._positions[0]
+        self.drawing = model.drawing
+        masses = np.asarray(self.drawing.masses)
+        self._heavy = masses > 0
+        self._trailed = int(np.flatnonzero(self._heavy)[-1])  # the last massive point
         spacing = self.traj.t[1] - self.traj.t[0] if len(self.traj.t) > 1 else 1.0
         self._trail_states = int(round(trail / spacing))
         self.index = 0
@@ -257,15 +264,16 @@ class PendulumScene:
             wspace=0.2,
         )
         chain = figure.add_subplot(grid[0])
-        chain_frame(chain, model, margin=1.08)
+        self._reach = drawing_frame(chain, model, [p[0] for p in self._positions],
+                                    [p[1] for p in self._positions], margin=1.08)
         titles = {_run_title(run) for run in runs}
         chain.set_title(titles.pop() if len(titles) == 1 else "", fontsize=size)
-        bob_size = 10 * math.sqrt(min(model.masses) / max(model.masses))
+        bob_size = 10 * math.sqrt(masses[self._heavy].min() / masses.max())
         if len(runs) == 1:
             colours = [(TRAIL_COLOUR, "0.25", BOB_COLOUR)]
         else:
             colours = [(colour, colour, colour) for colour in RUN_COLOURS[: len(runs)]]
-        self.chains = []
+        self.chains, self.parts = [], []
         for k, (trail_colour, rod_colour, bob_colour) in enumerate(colours):
             trail_line = chain.plot([], [], color=trail_colour, lw=1.0, alpha=0.6, zorder=1 + k)[0]
             rods = chain.plot([], [], color=rod_colour, lw=2.5, zorder=2 + k)[0]
@@ -273,6 +281,9 @@ class PendulumScene:
                 [], [], "o", color=bob_colour, mec="black", zorder=2.5 + k, ms=bob_size
             )[0]
             self.chains.append((rods, bobs, trail_line))
+            springs = chain.plot([], [], color=rod_colour, lw=1.2, zorder=2 + k)[0]
+            pivots = chain.plot([], [], "s", color="black", ms=5, zorder=2.6 + k)[0]
+            self.parts.append((springs, pivots))
         self.rods, self.bobs, self.trail_line = self.chains[0]
 
         energy = figure.add_subplot(grid[1])
@@ -326,7 +337,9 @@ class PendulumScene:
         )
         # Blitting draws in this order: each run's trail, rods, bobs; a later run over an earlier.
         self.artists = [
-            artist for rods, bobs, trail in self.chains for artist in (trail, rods, bobs)
+            artist
+            for (rods, bobs, trail), (springs, pivots) in zip(self.chains, self.parts)
+            for artist in (trail, rods, springs, bobs, pivots)
         ]
         self.artists += list(self.energy_lines.values())
         self.readout = None
@@ -344,10 +357,16 @@ class PendulumScene:
         index = int(np.clip(index, 0, len(self.traj.t) - 1))
         self.index = index
         first = max(0, index - self._trail_states)
-        for (rods, bobs, trail_line), (x, y) in zip(self.chains, self._positions):
-            trail_line.set_data(x[first : index + 1, -1], y[first : index + 1, -1])
-            rods.set_data(np.r_[0.0, x[index]], np.r_[0.0, y[index]])
-            bobs.set_data(x[index], y[index])
+        heavy, last = self._heavy, self._trailed
+        for (rods, bobs, trail_line), (springs, pivots), (x, y) in zip(
+            self.chains, self.parts, self._positions
+        ):
+            trail_line.set_data(x[first : index + 1, last], y[first : index + 1, last])
+            rod_path, spring_path = joined_paths(self.drawing, x[index], y[index], self._reach)
+            rods.set_data(rod_path[:, 0], rod_path[:, 1])
+            springs.set_data(spring_path[:, 0], spring_path[:, 1])
+            bobs.set_data(x[index][heavy], y[index][heavy])
+            pivots.set_data(x[index][~heavy], y[index][~heavy])
         t = self.traj.t[: index + 1]
         for key, values in self._energies.items():
             self.energy_lines[key].set_data(t, values[: index + 1])

@@ -31,6 +31,7 @@ from ..model.pendulum import PendulumModel
 
 if TYPE_CHECKING:  # geometric imports plotting's neighbours; only the type is needed here
     from ..geometric import ModifiedEnergy
+from .drawing import drawing_frame, joined_paths
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -51,7 +52,6 @@ from .figures import (
 
 __all__ = [
     "PANELS",
-    "chain_frame",
     "draw_pendulum",
     "plot_angles",
     "plot_energy",
@@ -110,14 +110,21 @@ def plot_energy_error(traj: Trajectory, ax: Axes | None = None, relative: bool =
     return ax.figure
 
 
-def plot_angles(traj: Trajectory, ax: Axes | None = None) -> Figure:
-    """Each angle ``theta_i(t)`` [rad] (not wrapped: a full turn adds 2 pi)."""
+def plot_angles(traj: Trajectory, ax: Axes | None = None, names=None) -> Figure:
+    """Each angle ``theta_i(t)`` [rad] (not wrapped: a full turn adds 2 pi); with ``names``
+    (a system's coordinates, :attr:`~pendulum_lab.SystemModel.coordinate_names`), each
+    coordinate under its name."""
     traj = single_trajectory(traj)
     ax = get_axes(ax)
     n = traj.theta.shape[1]
     for i in range(n):
-        ax.plot(traj.t, traj.theta[:, i], label=f"θ{link_label(i, n)}")
-    ax.set(xlabel=axis_label("t"), ylabel="angle (rad)", title="Angles")
+        ax.plot(traj.t, traj.theta[:, i],
+                label=f"θ{link_label(i, n)}" if names is None else names[i])
+    if names is None:
+        ax.set(xlabel=axis_label("t"), ylabel="angle (rad)", title="Angles")
+    else:
+        ax.set(xlabel=axis_label("t"), ylabel="coordinate", title="Coordinates")
+        ax.legend(loc="upper right", fontsize="small")
     if n > 1:
         ax.legend(loc="upper right", fontsize="small")
     return ax.figure
@@ -363,40 +370,46 @@ def plot_normal_modes(model: PendulumModel, amplitude: float = 0.35, axes=None) 
 
 
 # --------------------------------------------------------------------------- configuration
-def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=None) -> Figure:
-    """The chain at angles ``theta``: rods, bobs (area proportional to mass), pivot.
+def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=None, *,
+                  t: float | None = None, trail_t=None) -> Figure:
+    """The model at coordinates ``theta`` (time ``t``): rods, springs, points (area
+    proportional to mass; a massless point, such as a shaken pivot, as a small mark), pivot.
 
     Parameters
     ----------
     model : PendulumModel
+        A chain, or a system given by its points (:attr:`~pendulum_lab.SystemModel.drawing`).
     theta : array_like, shape (n,)
     ax : Axes, optional
     trail : array_like, shape (N, n), optional
-        Earlier angles; the path of the last bob is drawn faintly.
+        Earlier coordinates; the path of the last massive point is drawn faintly.
+    t, trail_t : float and array_like of shape (N,), optional
+        The times of ``theta`` and of ``trail``, for a system whose points move with time.
     """
     theta = np.asarray(theta, dtype=float)
     if theta.shape != (model.n,):
         raise ValueError(f"`theta` must have shape ({model.n},), got {theta.shape}")
+    drawing = model.drawing
     ax = get_axes(ax, width=4.0, height=4.0)
+    masses = np.asarray(drawing.masses)
+    x, y = model.positions(theta, t)
+    seen_x, seen_y = [x], [y]
     if trail is not None:
-        tx, ty = model.positions(np.asarray(trail, dtype=float))
-        ax.plot(tx[:, -1], ty[:, -1], color="tab:purple", lw=0.7, alpha=0.5)
-    x, y = model.positions(theta)
-    ax.plot(np.r_[0.0, x], np.r_[0.0, y], color="0.25", lw=2.5, zorder=2)
-    sizes = 120 * np.asarray(model.masses) / max(model.masses)
-    ax.scatter(x, y, s=sizes, color="tab:red", edgecolor="black", zorder=3)
-    chain_frame(ax, model)
+        tx, ty = model.positions(np.asarray(trail, dtype=float), trail_t)
+        last = np.flatnonzero(masses > 0)[-1]
+        ax.plot(tx[:, last], ty[:, last], color="tab:purple", lw=0.7, alpha=0.5)
+        seen_x.append(tx), seen_y.append(ty)
+    reach = drawing_frame(ax, model, np.concatenate([np.ravel(v) for v in seen_x]),
+                          np.concatenate([np.ravel(v) for v in seen_y]))
+    rods, springs = joined_paths(drawing, x, y, reach)
+    ax.plot(rods[:, 0], rods[:, 1], color="0.25", lw=2.5, zorder=2)
+    ax.plot(springs[:, 0], springs[:, 1], color="0.25", lw=1.2, zorder=2)
+    heavy = masses > 0
+    ax.scatter(x[heavy], y[heavy], s=120 * masses[heavy] / masses.max(), color="tab:red",
+               edgecolor="black", zorder=3)
+    ax.plot(x[~heavy], y[~heavy], "s", color="black", ms=5, zorder=4)
     ax.set_title("Configuration")
     return ax.figure
-
-
-def chain_frame(ax: Axes, model: PendulumModel, margin: float = 1.1) -> None:
-    """Square axes in metres reaching ``margin`` times the chain's length, and the pivot."""
-    reach = margin * sum(model.lengths)
-    ax.set(
-        xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel="x (m)", ylabel="y (m)"
-    )
-    ax.plot([0], [0], "s", color="black", ms=6, zorder=4)
 
 
 # --------------------------------------------------------------------------- analyses
@@ -509,11 +522,19 @@ def _panel_energy_error(ax, traj, model):
 
 
 def _panel_angles(ax, traj, model):
-    plot_angles(traj, ax=ax)
+    plot_angles(traj, ax=ax, names=None if model.is_chain else model.coordinate_names)
 
 
 def _panel_phase(ax, traj, model):
-    plot_phase(traj, ax=ax)
+    if model.is_chain:
+        plot_phase(traj, ax=ax)
+        return
+    # A system's coordinates need not be angles: drawn as they are, not wrapped.
+    for i, name in enumerate(model.coordinate_names):
+        (line,) = ax.plot(traj.theta[:, i], traj.omega[:, i], lw=0.8, label=name)
+        ax.plot(traj.theta[0, i], traj.omega[0, i], "o", color=line.get_color(), ms=5)
+    ax.set(xlabel="coordinate q", ylabel="velocity dq/dt", title="Phase space")
+    ax.legend(loc="upper right", fontsize="small")
 
 
 def _panel_portrait(ax, traj, model):
@@ -521,7 +542,8 @@ def _panel_portrait(ax, traj, model):
 
 
 def _panel_pendulum(ax, traj, model):
-    draw_pendulum(model, traj.theta[-1], ax=ax, trail=traj.theta)
+    draw_pendulum(model, traj.theta[-1], ax=ax, trail=traj.theta, t=traj.t[-1],
+                  trail_t=traj.t)
     ax.set_title(f"Configuration at t = {traj.t[-1]:.2f} s")
 
 
@@ -536,7 +558,8 @@ PANELS: dict[str, Callable[[Axes, Trajectory, PendulumModel], None]] = {
 """Single-axes drawings by name, each ``(ax, trajectory, model) -> None``:
 
 ``energy`` (kinetic, potential, total), ``energy_error`` (relative, log
-scale), ``angles``, ``phase`` (all links overlaid), ``portrait`` (simple
-pendulum only: level sets of H with the trajectory), ``pendulum`` (final
-configuration with the last bob's path).
+scale), ``angles`` (a system's coordinates by name), ``phase`` (all links
+overlaid; a system's coordinates unwrapped), ``portrait`` (simple pendulum
+only: level sets of H with the trajectory), ``pendulum`` (final configuration
+with the last massive point's path; any model with a drawing).
 """

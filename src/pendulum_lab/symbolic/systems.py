@@ -154,7 +154,9 @@ class MechanicalSystem:
     forces : sequence of expressions, optional
         Further generalized forces ``Q(q, q', t)``, one per coordinate.
     joints : sequence of (i, j) pairs, optional
-        Points drawn joined (``-1`` is the origin); for drawings only.
+        Points drawn joined by a rod (point indices; ``-1`` is the origin); for drawings only.
+    springs : sequence of (i, j) pairs, optional
+        Points drawn joined by a spring (as ``joints``); for drawings only.
     name : str
         What the system is, for people ("the elastic pendulum").
 
@@ -183,7 +185,7 @@ class MechanicalSystem:
 
     def __init__(self, coordinates, parameters, *, points=None, masses=None, gravity=None,
                  potential=0, lagrangian=None, velocities=None, dissipation=0, forces=None,
-                 joints=None, name: str = "a mechanical system"):
+                 joints=None, springs=None, name: str = "a mechanical system"):
         self.q = sp.Matrix(_symbol_list("coordinates", coordinates))
         self.n = n = len(self.q)
         if velocities is None:
@@ -232,7 +234,8 @@ class MechanicalSystem:
             rest = self.lagrangian.xreplace({w: 0 for w in self.omega})
             self.kinetic = sp.expand(self.lagrangian - rest)
             self.potential = -rest
-        self.joints = [tuple(j) for j in (joints or [])]
+        self.joints = self._pairs("joints", joints)
+        self.springs = self._pairs("springs", springs)
         self.dissipation = self._expr("dissipation", dissipation)
         extra = sp.zeros(n, 1) if forces is None else _matrix("forces", forces, n)
         extra = extra.applyfunc(lambda e: self._expr("forces", e))
@@ -260,6 +263,22 @@ class MechanicalSystem:
                 f"({', '.join(map(str, self.parameters)) or 'none'}): declare "
                 f"{'it' if len(unknown) == 1 else 'them'} in `parameters` with a default value")
         return expr
+
+    def _pairs(self, name: str, pairs) -> list[tuple[int, int]]:
+        """Pairs of point indices (``-1``: the origin) that a drawing joins."""
+        found = []
+        for pair in pairs or []:
+            try:
+                i, j = (int(k) for k in pair)
+            except (TypeError, ValueError):
+                raise TypeError(f"`{name}` must hold pairs of point indices, got {pair!r}") \
+                    from None
+            if not (-1 <= i < len(self.points) and -1 <= j < len(self.points)) or i == j:
+                raise ValueError(
+                    f"`{name}` pair {tuple(pair)} must join two different points among 0 to "
+                    f"{len(self.points) - 1} (or -1, the origin)")
+            found.append((i, j))
+        return found
 
     def _rate(self, expr) -> sp.Expr:
         """``d expr / dt`` along a motion: ``sum dexpr/dq_i q'_i + dexpr/dt``."""
@@ -357,6 +376,19 @@ class MechanicalSystem:
         return bool(not (self.mass_matrix.free_symbols & (set(self.q) | {self.t}))
                     and all(b == 0 for b in self.momentum_offset)
                     and self.kinetic.xreplace({w: 0 for w in self.omega}) == 0)
+
+    @functools.cached_property
+    def angle_coordinates(self) -> tuple[bool, ...]:
+        """For each coordinate, whether it is an angle: whether the description depends on it
+        only through its sine and cosine (``theta``, not ``r`` or a cart's ``x``)."""
+        exprs = [self.lagrangian, self.dissipation, *self.generalized_forces,
+                 *(c for point in self.points for c in point)]
+        angles = []
+        for qi in self.q:
+            stand_in = {sp.sin(qi): sp.Dummy(), sp.cos(qi): sp.Dummy()}
+            angles.append(all(qi not in sp.expand_trig(e).subs(stand_in).free_symbols
+                              for e in exprs))
+        return tuple(angles)
 
     @property
     def euler_lagrange(self) -> sp.Eq:

@@ -39,7 +39,17 @@ def model_code(model: PendulumModel) -> str:
     >>> model_code(pl.driven_pendulum(drive_amplitude=1.5))
     'pl.driven_pendulum(damping=0.5, drive_amplitude=1.5, drive_frequency=0.6666666666666666, \
 mass=1.0, length=1.0, g=1.0)'
+
+    A system is built again by its factory (or, for one a student built with
+    ``pl.mechanical_system``, from the variable ``model`` holding it) with its parameters
+    replaced by name:
+
+    >>> model_code(pl.cart_pendulum(mass=0.25))
+    "pl.cart_pendulum().replace(**{'M': 1.0, 'm': 0.25, 'l': 1.0, 'g': 9.81})"
     """
+    if not model.is_chain:
+        values = {str(s): float(v) for s, v in model.parameter_values.items()}
+        return f"{model.factory or 'model'}.replace(**{values!r})"
     masses, lengths = [float(m) for m in model.masses], [float(v) for v in model.lengths]
     g = float(model.g)
     forces = []

@@ -24,6 +24,7 @@ from collections.abc import Sequence
 
 import ipywidgets as widgets
 import numpy as np
+from sympy import pretty
 
 from .. import validation as check
 from ..driver.simulate import Trajectory, check_method_fits, hamiltonian_field, step_count
@@ -52,9 +53,11 @@ __all__ = [
     "pendulum_controls",
     "run_controls",
     "simulate_controls",
+    "parameter_key",
     "slider",
     "start_state",
     "state_controls",
+    "system_state_controls",
     "state_from_controls",
 ]
 
@@ -138,8 +141,53 @@ def state_controls(
     return controls
 
 
+def system_state_controls(model: PendulumModel, theta0, omega0) -> dict:
+    """A system's initial-state sliders, under the keys of :func:`control_names`: an angle
+    coordinate in ``[-pi, pi]`` rad, another within two of its scale of the start value
+    (``max(1, |q0|)``), each velocity in ``[-10, 10]`` per second."""
+    keys = control_names(model.n)
+    controls = {}
+    for i, (key, name, angle) in enumerate(zip(keys["theta"], model.coordinate_names,
+                                               model.angle_coordinates)):
+        value = float(theta0[i])
+        if angle:
+            low, high, unit = -np.pi, np.pi, " (rad)"
+        else:
+            scale = max(1.0, abs(value))
+            low, high, unit = value - 2 * scale, value + 2 * scale, ""
+        controls[key] = slider(value, low, high, 0.01, f"{name}{unit}", ".3f")
+    for i, (key, name, angle) in enumerate(zip(keys["omega"], model.coordinate_names,
+                                               model.angle_coordinates)):
+        unit = " (rad/s)" if angle else " (/s)"
+        controls[key] = slider(float(omega0[i]), -10, 10, 0.05, f"d{name}/dt{unit}", ".2f")
+    return controls
+
+
+def parameter_key(model: PendulumModel, name: str) -> str:
+    """The control name of a system's parameter: its own name, unless a fixed control
+    already has it (then ``param_<name>``)."""
+    fixed = {"method", "dt", "t_end", *(k for keys in control_names(model.n).values()
+                                          for k in keys)}
+    return f"param_{name}" if name in fixed else name
+
+
 def parameter_controls(model: PendulumModel) -> dict:
-    """Sliders for masses [kg], lengths [m] and g [m/s^2], starting at the model's values."""
+    """Sliders for masses [kg], lengths [m] and g [m/s^2], starting at the model's values;
+    for a system, one slider per parameter, from a tenth to three times its value (a
+    parameter at 0 from -1 to 1), named as the system names it."""
+    if not model.is_chain:
+        controls = {}
+        for symbol, value in model.parameter_values.items():
+            name = str(symbol)
+            if value == 0:
+                low, high, step = -1.0, 1.0, 0.01
+            else:
+                low, high = sorted((0.1 * value, 3.0 * value))
+                step = 10.0 ** math.floor(math.log10(abs(value))) / 100
+            digits = max(0, -math.floor(math.log10(step)))
+            controls[parameter_key(model, name)] = slider(
+                value, low, high, step, pretty(symbol, use_unicode=True), f".{digits}f")
+        return controls
     n, keys = model.n, control_names(model.n)
     controls = {}
     for i, key in enumerate(keys["mass"]):
@@ -185,7 +233,16 @@ def forces_text(model: PendulumModel) -> str:
     >>> import pendulum_lab as pl
     >>> forces_text(pl.driven_pendulum())
     'damping 0.5 N m s/rad, drive 1.2 cos(0.6667 t) N m'
+    >>> forces_text(pl.kapitza_pendulum())
+    'no forces besides the potential, depends on t (period 0.06283 s)'
     """
+    if not model.is_chain:
+        parts = ["no forces besides the potential" if model.is_conservative
+                 else f"forces {model.damping}"]
+        if not model.is_autonomous:
+            period = model.drive_period
+            parts.append("depends on t" + ("" if period is None else f" (period {period:.4g} s)"))
+        return ", ".join(parts)
     coefficients = {float(c) for c in model.damping}
     if model.is_conservative:
         parts = ["no damping"]
@@ -239,7 +296,11 @@ def run_controls(
 
 def model_from_controls(model: PendulumModel, controls: dict) -> PendulumModel:
     """``model`` with the masses, lengths and ``g`` the parameter controls hold; its damping
-    and drive unchanged (cheap: compiled code is shared per number of links)."""
+    and drive unchanged (cheap: compiled code is shared per number of links). A system's
+    parameters are its own sliders' values (its compiled code takes them as arguments)."""
+    if not model.is_chain:
+        return model.replace(**{str(s): controls[parameter_key(model, str(s))].value
+                                for s in model.parameter_values})
     keys = control_names(model.n)
     return model.replace(
         masses=tuple(controls[k].value for k in keys["mass"]),
@@ -278,15 +339,25 @@ def column(title: str, controls: Sequence[widgets.Widget]) -> widgets.VBox:
     return widgets.VBox([widgets.HTML(f"<b>{title}</b>"), *controls])
 
 
-def start_state(n: int, theta0=None, omega0=None) -> tuple[np.ndarray, np.ndarray]:
+def start_state(model: PendulumModel, theta0=None, omega0=None) -> tuple[np.ndarray, np.ndarray]:
     """The explorers' starting state: the given one checked, or the default.
 
     The default is at rest from 1 rad (one link) or from angles spread over
-    2.0-2.5 rad (a lively, chaotic release). Angles must lie in [-pi, pi] and
-    velocities in [-10, 10] rad/s, the range of the sliders.
+    2.0-2.5 rad (a lively, chaotic release); a system's from its ``start``. Angles must
+    lie in [-pi, pi] (a system's other coordinates need only be finite) and velocities in
+    [-10, 10] per second, the range of the sliders.
     """
-    default = [1.0] if n == 1 else np.linspace(2.0, 2.5, n)
-    theta0 = check.state_vector("theta0", default if theta0 is None else theta0, n, np.pi, "rad")
+    n = model.n
+    if model.is_chain:
+        default = [1.0] if n == 1 else np.linspace(2.0, 2.5, n)
+        theta0 = check.state_vector("theta0", default if theta0 is None else theta0, n, np.pi,
+                                    "rad")
+    else:
+        theta0 = check.state_vector("theta0", model.start if theta0 is None else theta0, n)
+        for i, angle in enumerate(model.angle_coordinates):
+            if angle and abs(theta0[i]) > np.pi:
+                raise ValueError(f"`theta0[{i}]` ({model.coordinate_names[i]}, an angle) must "
+                                 f"lie in [-pi, pi] rad, the sliders' range; got {theta0[i]:g}")
     omega0 = check.state_vector("omega0", np.zeros(n) if omega0 is None else omega0, n, 10.0,
                                 "rad/s")
     return theta0, omega0
@@ -354,12 +425,15 @@ def pendulum_controls(
         or a drive gets a note of them under its parameters.
     """
     n, keys = model.n, control_names(model.n)
+    states = (state_controls(n, theta0, omega0) if model.is_chain
+              else system_state_controls(model, theta0, omega0))
     controls = {
-        **state_controls(n, theta0, omega0),
+        **states,
         **parameter_controls(model),
         **run_controls(model, method, t_end, dt, t_end_range=t_end_range),
     }
-    parameters = keys["mass"] + keys["length"] + ["g"]
+    parameters = (keys["mass"] + keys["length"] + ["g"] if model.is_chain
+                  else [parameter_key(model, str(s)) for s in model.parameter_values])
     if not energy_is_conserved(model):
         # The model's damping and drive are part of it: say so beside the sliders.
         parameters.append(widgets.HTML(f"<i>and fixed: {forces_text(model)}</i>"))
@@ -407,7 +481,7 @@ def build_simulator(
         (the simulator's message).
     """
     model = require_model(model)
-    theta0, omega0 = start_state(model.n, theta0, omega0)
+    theta0, omega0 = start_state(model, theta0, omega0)
     speed = check.choice("speed", speed, SPEEDS)
     trail = check.non_negative_number("trail", trail)
     t_end = check.number_in("t_end", t_end, *SIMULATOR_T_END, "s")

@@ -272,7 +272,7 @@ def explore(
     0.5
     """
     model = require_model(model)
-    theta0, omega0 = start_state(model.n, theta0, omega0)
+    theta0, omega0 = start_state(model, theta0, omega0)
     ex = Explorer(model, method, t_end, dt, theta0, omega0, plots)
     ex.update()
     return ex

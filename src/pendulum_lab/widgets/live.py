@@ -62,6 +62,7 @@ __all__ = [
     "PLAYBACK_SPACING",
     "LiveSimulator",
     "PendulumView",
+    "figure_message",
     "live_simulator",
     "released_angles",
     "run_messages",
@@ -91,11 +92,14 @@ def run_messages(
     1. kinetic, potential and total energy, shape ``(count, 3)`` [J];
     2. the energy error ``E - E(0)``, shape ``(count,)`` [J], computed in
        float64 before the cast (float32 energies would hide errors below
-       about 1e-6 J).
+       about 1e-6 J);
+    3. for a system given by its points (not a chain), the points' positions,
+       shape ``(count, points, 2)`` [m]: the browser cannot compute them.
 
     ``content`` says where the chunk goes (``run``, ``chunk`` of ``chunks``,
-    ``first`` state, ``count``, ``chunk_states``) and repeats what the drawing needs: ``links``,
-    ``lengths``, ``masses``, ``states`` (all chunks together), ``spacing`` (s
+    ``first`` state, ``count``, ``chunk_states``) and repeats what the drawing needs: ``links``
+    (the number of coordinates), ``lengths`` (a chain's; empty for a system), ``figure``
+    (:func:`figure_message`), ``states`` (all chunks together), ``spacing`` (s
     between sent states), ``dt``, ``stride``, ``steps``, ``method``,
     ``energy0``, ``energy_range`` (bar scale, including 0), ``error_max``
     (largest ``|E - E(0)|`` over every step), ``completed``, ``conserved``
@@ -125,6 +129,8 @@ def run_messages(
     >>> (content, buffers), = run_messages(traj, sp_, run=1)
     >>> content["states"], [b.nbytes for b in buffers]
     (101, [404, 1212, 404])
+    >>> content["figure"]["rods"], content["figure"]["reach"]
+    ([[-1, 0]], 1.0)
     >>> float(np.frombuffer(buffers[0], "<f4")[0])
     1.0
     """
@@ -135,6 +141,9 @@ def run_messages(
     stride = playback_stride(traj.dt)
     kept = np.arange(0, len(traj.t), stride)
     angles = traj.theta[kept]
+    points = None
+    if not model.is_chain:
+        points = np.stack(model.positions(angles, traj.t[kept]), axis=-1)
     energies = np.column_stack([traj.kinetic, traj.potential, traj.energy])[kept]
     error = traj.energy_error[kept]
     levels = np.concatenate([[0.0], energies[np.isfinite(energies)]])
@@ -147,8 +156,8 @@ def run_messages(
         "chunk_states": chunk_states,
         "states": len(kept),
         "links": model.n,
-        "lengths": list(model.lengths),
-        "masses": list(model.masses),
+        "lengths": list(model.lengths) if model.is_chain else [],
+        "figure": figure_message(model, points),
         "spacing": stride * traj.dt,
         "dt": traj.dt,
         "stride": stride,
@@ -166,18 +175,47 @@ def run_messages(
         part = slice(first, first + chunk_states)
         count = len(kept[part])
         content = {**meta, "chunk": chunk, "first": first, "count": count}
-        buffers = [float32_buffer(a[part]) for a in (angles, energies, error)]
+        sent = (angles, energies, error) if points is None else (angles, energies, error, points)
+        buffers = [float32_buffer(a[part]) for a in sent]
         messages.append((content, buffers))
     return messages
 
 
-def released_angles(model: PendulumModel, theta, bob: int, x: float, y: float) -> np.ndarray:
-    """The chain's angles after bob ``bob`` is dragged to the point ``(x, y)`` and released.
+def figure_message(model: PendulumModel, points=None) -> dict:
+    """What the browser draws the model with: ``kind`` (``"chain"``, whose points the browser
+    computes from the angles and ``lengths``, or ``"points"``, sent), the
+    :class:`~pendulum_lab.model.Drawing`'s ``masses``, ``rods``, ``springs`` and ``movable``
+    (None or the sentence refusing a drag), ``uses_origin``, ``trailed`` (the point whose
+    path is the trail: the last massive one) and ``reach`` [m] (a chain's length, else the
+    farthest point of ``points``, shape ``(states, points, 2)``, from the origin)."""
+    drawing = model.drawing
+    masses = [float(m) for m in drawing.masses]
+    reach = drawing.reach
+    if reach is None:
+        finite = np.abs(points[np.isfinite(points)])
+        reach = float(finite.max()) if finite.size and finite.max() > 0 else 1.0
+    return {
+        "kind": "chain" if model.is_chain else "points",
+        "masses": masses,
+        "rods": [list(pair) for pair in drawing.rods],
+        "springs": [list(pair) for pair in drawing.springs],
+        "movable": list(drawing.movable),
+        "uses_origin": drawing.uses_origin,
+        "trailed": max(k for k, m in enumerate(masses) if m > 0),
+        "reach": float(reach),
+    }
 
-    Bob ``bob`` (0-based) moves on its circle around the joint before it, to
+
+def released_angles(model: PendulumModel, theta, bob: int, x: float, y: float) -> np.ndarray:
+    """The coordinates after point ``bob`` is dragged to ``(x, y)`` and released (at ``t = 0``,
+    where the new run starts): :meth:`~pendulum_lab.PendulumModel.place_point`.
+
+    For a chain, bob ``bob`` (0-based) moves on its circle around the joint before it, to
     the point of the circle in the direction of ``(x, y)``; the other arms keep
     their angles. A point beyond the arm's reach is therefore clamped onto the
-    circle (a rod does not stretch): only its direction counts. All angles
+    circle (a rod does not stretch): only its direction counts. For a system given by its
+    points, the coordinates nearest ``theta`` that put the point there (a point its
+    coordinates do not place, such as a shaken pivot, is refused with the reason). Angles
     come back wrapped into ``(-pi, pi]``, the range of the angle sliders.
 
     Parameters
@@ -208,22 +246,10 @@ def released_angles(model: PendulumModel, theta, bob: int, x: float, y: float) -
     """
     require_model(model)
     theta = check.state_vector("theta", theta, model.n)
-    bob = check.index_below("bob", bob, model.n)
+    bob = check.index_below("bob", bob, len(model.drawing.masses))
     x, y = check.real_number("x", x), check.real_number("y", y)
-    joint_x, joint_y = 0.0, 0.0
-    if bob > 0:
-        xs, ys = model.positions(theta)
-        joint_x, joint_y = float(xs[bob - 1]), float(ys[bob - 1])
-    dx, dy = x - joint_x, y - joint_y
-    if math.hypot(dx, dy) <= 1e-9 * sum(model.lengths):
-        raise ValueError(
-            f"the release point ({x:.3g}, {y:.3g}) m is the joint of arm {bob + 1}: "
-            "it gives the arm no direction"
-        )
-    angles = theta.copy()
-    # theta is measured from the downward vertical: (x, y) = l (sin theta, -cos theta).
-    angles[bob] = math.atan2(dx, -dy)
-    return wrap_angle(angles)
+    placed = model.place_point(bob, x, y, theta, t=0.0)
+    return np.where(model.angle_coordinates, wrap_angle(placed), placed)
 
 
 class PendulumView(ReplayWidget):

@@ -2,9 +2,13 @@
 //
 // The kernel sends each run as float32 buffers in chunks (pendulum_lab.widgets.live.
 // run_messages); this module plays the run with requestAnimationFrame at the display's
-// frame rate, interpolating linearly between the saved states, and draws the chain with
-// a trail, energy bars, the energy-error trace and the readouts. Dragging a bob moves
-// the chain; on release the kernel is asked for the motion from there. A text
+// frame rate, interpolating linearly between the saved states, and draws the model with
+// a trail, energy bars, the energy-error trace and the readouts. The model is points
+// joined by rods and springs (header.figure): a chain's points come from its angles and
+// lengths, a system's points are sent beside its coordinates. Dragging a bob moves the
+// chain (a system's point follows the pointer alone); on release the kernel is asked for
+// the motion from there. A point the coordinates do not place (a shaken pivot) is not
+// dragged: its sentence, from the kernel, goes to the status line. A text
 // description of the state shown (time, energies, energy error) is kept in an ARIA live
 // region, updated when the state shown changes other than by playing (a step, a scrub,
 // pause, a new run) and when playing starts or ends, so that a screen reader announces it.
@@ -38,11 +42,13 @@ function element(tag, className, attributes = {}) {
 
 // One run as it arrives: preallocated arrays filled chunk by chunk.
 function newRun(header) {
-  const { states, links } = header;
+  const { states, links, figure } = header;
+  const sentPoints = figure.kind === "points" ? figure.masses.length : 0;
   return {
     id: header.run,
     meta: header,
     angles: new Float32Array(states * links),
+    points: new Float32Array(states * sentPoints * 2), // a system's x, y of each point
     energies: new Float32Array(states * 3),
     error: new Float32Array(states),
     lastBob: new Float32Array(states * 2), // x, y of the last bob, for the trail
@@ -58,8 +64,17 @@ function addChunk(run, header, buffers) {
   run.angles.set(floats(buffers[0]), header.first * n);
   run.energies.set(floats(buffers[1]), header.first * 3);
   run.error.set(floats(buffers[2]), header.first);
-  const lengths = header.lengths;
-  for (let i = header.first; i < header.first + header.count; i++) {
+  const figure = header.figure;
+  if (figure.kind === "points") {
+    const count = figure.masses.length;
+    run.points.set(floats(buffers[3]), header.first * count * 2);
+    for (let i = header.first; i < header.first + header.count; i++) {
+      run.lastBob[2 * i] = run.points[(i * count + figure.trailed) * 2];
+      run.lastBob[2 * i + 1] = run.points[(i * count + figure.trailed) * 2 + 1];
+    }
+  }
+  const lengths = figure.kind === "chain" ? header.lengths : [];
+  for (let i = header.first; figure.kind === "chain" && i < header.first + header.count; i++) {
     let x = 0;
     let y = 0;
     for (let j = 0; j < n; j++) {
@@ -238,6 +253,17 @@ function render({ model, el }) {
     }
     return out;
   }
+  // A system's points at `time`: [xs, ys], interpolated like the coordinates.
+  function pointsAt(time) {
+    const count = run.meta.figure.masses.length;
+    const xs = new Float64Array(count);
+    const ys = new Float64Array(count);
+    for (let j = 0; j < count; j++) {
+      xs[j] = seriesAt(run.points, 2 * count, 2 * j, time);
+      ys[j] = seriesAt(run.points, 2 * count, 2 * j + 1, time);
+    }
+    return [xs, ys];
+  }
   function seriesAt(array, width, column, time) {
     const last = Math.max(run.available - 1, 0);
     const s = Math.min(time / run.meta.spacing, last);
@@ -250,26 +276,32 @@ function render({ model, el }) {
 
   // ---- geometry of the chain panel -------------------------------------------------------
   function chainScale() {
-    const reach = run ? run.meta.lengths.reduce((a, b) => a + b, 0) : 2;
+    const reach = run ? run.meta.figure.reach : 2;
     return (CHAIN / 2 - 14) / (1.05 * reach);
   }
   const pivot = { x: CHAIN / 2, y: CHAIN / 2 };
   function toCanvas(x, y, s) {
     return [pivot.x + x * s, pivot.y - y * s];
   }
+  // The points of the configuration shown, [xs, ys] (the pivot not among them).
   function positions(angles) {
+    if (run.meta.figure.kind === "points") return dragging ? [dragging.xs, dragging.ys] : pointsAt(t);
     const lengths = run.meta.lengths;
-    const xs = [0];
-    const ys = [0];
+    const xs = [];
+    const ys = [];
+    let x = 0;
+    let y = 0;
     for (let j = 0; j < angles.length; j++) {
-      xs.push(xs[j] + lengths[j] * Math.sin(angles[j]));
-      ys.push(ys[j] - lengths[j] * Math.cos(angles[j]));
+      x += lengths[j] * Math.sin(angles[j]);
+      y -= lengths[j] * Math.cos(angles[j]);
+      xs.push(x);
+      ys.push(y);
     }
     return [xs, ys];
   }
   function bobRadius(j) {
-    const masses = run.meta.masses;
-    return 4 + 8 * Math.sqrt(masses[j] / Math.max(...masses));
+    const masses = run.meta.figure.masses;
+    return masses[j] > 0 ? 4 + 8 * Math.sqrt(masses[j] / Math.max(...masses)) : 4;
   }
 
   // ---- drawing ---------------------------------------------------------------------------
@@ -292,6 +324,8 @@ function render({ model, el }) {
     drawReadout(c);
     root.dataset.time = t.toFixed(4);
     root.dataset.theta = Array.from(angles, (a) => a.toFixed(5)).join(",");
+    const [xs, ys] = positions(angles);
+    root.dataset.points = Array.from(xs, (x, j) => `${x.toFixed(5)} ${ys[j].toFixed(5)}`).join(",");
   }
 
   function drawChain(c, angles) {
@@ -319,25 +353,37 @@ function render({ model, el }) {
         for (let i = k + 1; i <= end; i++) {
           c.lineTo(...toCanvas(run.lastBob[2 * i], run.lastBob[2 * i + 1], s));
         }
-        if (end === last) c.lineTo(...toCanvas(xs[xs.length - 1], ys[ys.length - 1], s));
+        const j = run.meta.figure.trailed;
+        if (end === last) c.lineTo(...toCanvas(xs[j], ys[j], s));
         c.stroke();
       }
       c.globalAlpha = 1;
     }
     const [xs, ys] = positions(angles);
+    const figure = run.meta.figure;
+    const at = (k) => (k < 0 ? toCanvas(0, 0, s) : toCanvas(xs[k], ys[k], s));
     c.strokeStyle = COLOURS.rod;
     c.lineWidth = 3;
-    c.beginPath();
-    c.moveTo(...toCanvas(0, 0, s));
-    for (let j = 1; j < xs.length; j++) c.lineTo(...toCanvas(xs[j], ys[j], s));
-    c.stroke();
-    c.fillStyle = "#000000";
-    c.fillRect(pivot.x - 4, pivot.y - 4, 8, 8);
-    for (let j = 1; j < xs.length; j++) {
-      const [px, py] = toCanvas(xs[j], ys[j], s);
+    for (const [i, j] of figure.rods) {
       c.beginPath();
-      c.arc(px, py, bobRadius(j - 1), 0, 2 * Math.PI);
-      c.fillStyle = dragging && dragging.bob === j - 1 ? "#ff9896" : COLOURS.bob;
+      c.moveTo(...at(i));
+      c.lineTo(...at(j));
+      c.stroke();
+    }
+    c.lineWidth = 1.5;
+    for (const [i, j] of figure.springs) drawSpring(c, at(i), at(j));
+    c.fillStyle = "#000000";
+    if (figure.uses_origin) c.fillRect(pivot.x - 4, pivot.y - 4, 8, 8);
+    for (let j = 0; j < xs.length; j++) {
+      const [px, py] = toCanvas(xs[j], ys[j], s);
+      if (figure.masses[j] === 0) {
+        c.fillStyle = "#000000"; // a massless point: a shaken pivot
+        c.fillRect(px - 4, py - 4, 8, 8);
+        continue;
+      }
+      c.beginPath();
+      c.arc(px, py, bobRadius(j), 0, 2 * Math.PI);
+      c.fillStyle = dragging && dragging.bob === j ? "#ff9896" : COLOURS.bob;
       c.fill();
       c.strokeStyle = "#000000";
       c.lineWidth = 1;
@@ -348,6 +394,24 @@ function render({ model, el }) {
       c.font = "12px sans-serif";
       c.fillText(pending ? "computing the new motion…" : "release to start from here", 10, CHAIN - 10);
     }
+  }
+
+  // A zigzag between two canvas points, of constant width however far it is stretched.
+  function drawSpring(c, [x0, y0], [x1, y1]) {
+    const length = Math.hypot(x1 - x0, y1 - y0);
+    if (length === 0) return;
+    const [ux, uy] = [(x1 - x0) / length, (y1 - y0) / length];
+    const turns = 9;
+    const width = 6;
+    c.beginPath();
+    c.moveTo(x0, y0);
+    for (let k = 0; k <= 2 * turns; k++) {
+      const along = length * (0.1 + (0.8 * k) / (2 * turns));
+      const side = k === 0 || k === 2 * turns ? 0 : k % 2 ? width : -width;
+      c.lineTo(x0 + along * ux - side * uy, y0 + along * uy + side * ux);
+    }
+    c.lineTo(x1, y1);
+    c.stroke();
   }
 
   function drawBars(c) {
@@ -642,28 +706,42 @@ function render({ model, el }) {
     const s = chainScale();
     let best = -1;
     let bestDistance = Infinity;
-    for (let j = 1; j < xs.length; j++) {
+    for (let j = 0; j < xs.length; j++) {
       const [bx, by] = toCanvas(xs[j], ys[j], s);
       const d = Math.hypot(px - bx, py - by);
-      if (d <= bobRadius(j - 1) + 10 && d < bestDistance) {
-        best = j - 1;
+      if (d <= bobRadius(j) + 10 && d < bestDistance) {
+        best = j;
         bestDistance = d;
       }
     }
     root.focus({ preventScroll: true });
     if (best < 0) return;
+    const refusal = run.meta.figure.movable[best];
+    if (refusal) {
+      setStatus(refusal, "error"); // a point the coordinates do not place: say why, no drag
+      root.dataset.refused = String(best);
+      return;
+    }
     event.preventDefault();
     canvas.setPointerCapture(event.pointerId);
-    dragging = { bob: best, angles, pointerId: event.pointerId };
+    dragging = { bob: best, angles, xs: Array.from(xs), ys: Array.from(ys), pointerId: event.pointerId };
     root.dataset.dragging = String(best);
     dirty = true;
   });
   canvas.addEventListener("pointermove", (event) => {
     if (!dragging || event.pointerId !== dragging.pointerId) return;
     const [x, y] = pointerMetres(event);
-    const [xs, ys] = positions(dragging.angles);
     const k = dragging.bob;
-    const angle = Math.atan2(x - xs[k], -(y - ys[k]));
+    if (run.meta.figure.kind === "points") {
+      // Only the kernel knows a system's coordinates: the point follows the pointer alone.
+      dragging.xs[k] = x;
+      dragging.ys[k] = y;
+      dirty = true;
+      return;
+    }
+    const [xs, ys] = positions(dragging.angles);
+    const [jx, jy] = k > 0 ? [xs[k - 1], ys[k - 1]] : [0, 0];
+    const angle = Math.atan2(x - jx, -(y - jy));
     if (Number.isFinite(angle)) dragging.angles[k] = angle;
     dirty = true;
   });
