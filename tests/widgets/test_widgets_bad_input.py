@@ -60,15 +60,30 @@ def test_set_controls_names_the_control_and_its_choices():
     assert explorer.set_controls({"method": "rk4"})  # negative control: a listed choice runs
 
 
+def _lagrangian_only():
+    import sympy as sp
+    q, w = sp.symbols("q w", real=True)
+    return pl.mechanical_system([q], {}, lagrangian=w**2 / 2 - q**2 / 2, velocities=[w],
+                                name="an oscillator given by its Lagrangian")
+
+
 @pytest.mark.parametrize("build", [
-    lambda model: widgets.live_simulator(model, [1.0, 0.5], [0.0, 0.0]),
-    lambda model: animation.simulator(model),
-    lambda model: widgets.section_explorer(model),
-], ids=["live_simulator", "animation.simulator", "section_explorer"])
-def test_the_drawings_refuse_a_system_given_by_its_points_and_say_so(build):
-    # A SystemModel has no rods to draw: a TypeError that says what the model is, not an
-    # AttributeError from inside the drawing code; a chain of two links builds (the control).
+    lambda model: widgets.live_simulator(model, t_end=1.0),
+    lambda model: animation.simulator(model, t_end=1.0),
+    lambda model: widgets.explore(model, t_end=1.0, plots=("pendulum",)),
+], ids=["live_simulator", "animation.simulator", "explore"])
+def test_the_drawings_refuse_a_system_without_points_and_say_so(build):
+    # A system given by its Lagrangian has nothing to draw: a TypeError that names it and says
+    # how to give points, not an AttributeError from inside; one given by its points builds.
+    with pytest.raises(TypeError, match="given by its Lagrangian.*`points`") as refused:
+        build(_lagrangian_only())
+    assert "an oscillator given by its Lagrangian" in str(refused.value)
+    build(pl.elastic_pendulum())
+
+
+def test_the_section_explorer_refuses_a_system_and_says_so():
+    # Its section is the double pendulum's (theta1 = 0): a TypeError naming the system.
     with pytest.raises(TypeError, match="not a chain|a chain of two links") as refused:
-        build(pl.elastic_pendulum())
+        widgets.section_explorer(pl.elastic_pendulum())
     assert "the elastic pendulum" in str(refused.value)
-    build(pl.double_pendulum())
+    widgets.section_explorer(pl.double_pendulum(), t_end=1.0)  # the control builds

@@ -293,18 +293,29 @@ class SystemModel(PendulumModel):
             xs, ys = self.positions(coordinates, t)
             return np.array([xs[point], ys[point]])
 
-        damping = 1e-6
-        for _ in range(100):
-            miss = place(q) - target
-            steps = 1e-7 * (1.0 + np.abs(q))
-            jac = np.column_stack([(place(q + e) - place(q - e)) / (2 * h)
-                                   for e, h in zip(np.diag(steps), steps)])
+        def jacobian(coordinates):
+            steps = 1e-7 * (1.0 + np.abs(coordinates))
+            return np.column_stack([(place(coordinates + e) - place(coordinates - e)) / (2 * h)
+                                    for e, h in zip(np.diag(steps), steps)])
+
+        # A step is kept only if it brings the point nearer; the damping grows until one does
+        # (far out of reach, plain Gauss-Newton overshoots round the circle).
+        miss = place(q) - target
+        damping = 1e-3
+        for _ in range(200):
+            jac = jacobian(q)
             normal = jac.T @ jac
             scale = max(np.trace(normal), 1e-12)
             step = np.linalg.solve(normal + damping * scale * np.eye(self.n), -jac.T @ miss)
-            q = q + step
-            if np.max(np.abs(step)) < 1e-12 * (1.0 + np.max(np.abs(q))):
-                break
+            trial_miss = place(q + step) - target
+            if trial_miss @ trial_miss < miss @ miss:
+                q, miss, damping = q + step, trial_miss, max(damping / 10, 1e-12)
+                if np.max(np.abs(step)) < 1e-12 * (1.0 + np.max(np.abs(q))):
+                    break
+            else:
+                damping *= 10
+                if damping > 1e12:
+                    break  # no step helps: the nearest place it can reach
         matrix = self.mass_matrix_at(q, t)
         if not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-12 * max(
                 1.0, np.max(np.abs(matrix)) ** self.n):

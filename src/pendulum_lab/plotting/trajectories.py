@@ -31,7 +31,7 @@ from ..model.pendulum import PendulumModel
 
 if TYPE_CHECKING:  # geometric imports plotting's neighbours; only the type is needed here
     from ..geometric import ModifiedEnergy
-from .drawing import drawing_frame, joined_paths
+from .drawing import drawing_frame, joined_paths, view_reach
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -399,15 +399,16 @@ def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=Non
         last = np.flatnonzero(masses > 0)[-1]
         ax.plot(tx[:, last], ty[:, last], color="tab:purple", lw=0.7, alpha=0.5)
         seen_x.append(tx), seen_y.append(ty)
-    reach = drawing_frame(ax, model, np.concatenate([np.ravel(v) for v in seen_x]),
-                          np.concatenate([np.ravel(v) for v in seen_y]))
-    rods, springs = joined_paths(drawing, x, y, reach)
+    seen_x = np.concatenate([np.ravel(v) for v in seen_x])
+    seen_y = np.concatenate([np.ravel(v) for v in seen_y])
+    rods, springs = joined_paths(drawing, x, y, view_reach(model, seen_x, seen_y))
     ax.plot(rods[:, 0], rods[:, 1], color="0.25", lw=2.5, zorder=2)
     ax.plot(springs[:, 0], springs[:, 1], color="0.25", lw=1.2, zorder=2)
     heavy = masses > 0
     ax.scatter(x[heavy], y[heavy], s=120 * masses[heavy] / masses.max(), color="tab:red",
                edgecolor="black", zorder=3)
     ax.plot(x[~heavy], y[~heavy], "s", color="black", ms=5, zorder=4)
+    drawing_frame(ax, model, seen_x, seen_y)
     ax.set_title("Configuration")
     return ax.figure
 

@@ -481,6 +481,7 @@ def build_simulator(
         (the simulator's message).
     """
     model = require_model(model)
+    model.drawing  # noqa: B018 (a model with nothing to draw is refused here, a TypeError)
     theta0, omega0 = start_state(model, theta0, omega0)
     speed = check.choice("speed", speed, SPEEDS)
     trail = check.non_negative_number("trail", trail)

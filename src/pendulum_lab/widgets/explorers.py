@@ -273,6 +273,8 @@ def explore(
     """
     model = require_model(model)
     theta0, omega0 = start_state(model, theta0, omega0)
+    if "pendulum" in plots:
+        model.drawing  # noqa: B018 (a model with nothing to draw is refused here, a TypeError)
     ex = Explorer(model, method, t_end, dt, theta0, omega0, plots)
     ex.update()
     return ex
