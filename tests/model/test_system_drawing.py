@@ -40,9 +40,9 @@ def test_angle_coordinates_are_those_seen_only_through_sine_and_cosine():
     assert pl.double_pendulum().angle_coordinates == (True, True)
     # Negative control: a torsion spring k theta^2 / 2 makes theta no longer 2 pi-periodic.
     th = sp.Symbol("theta", real=True)
-    m, l, g, k = sp.symbols("m l g k", positive=True)
-    spring = pl.mechanical_system([th], {m: 1.0, l: 1.0, g: 9.81, k: 2.0},
-                                  points=[(l * sp.sin(th), -l * sp.cos(th))], masses=[m],
+    m, rod, g, k = sp.symbols("m l g k", positive=True)
+    spring = pl.mechanical_system([th], {m: 1.0, rod: 1.0, g: 9.81, k: 2.0},
+                                  points=[(rod * sp.sin(th), -rod * sp.cos(th))], masses=[m],
                                   gravity=g, potential=k * th**2 / 2, joints=[(-1, 0)])
     assert spring.angle_coordinates == (False,)
 
