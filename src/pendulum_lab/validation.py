@@ -150,7 +150,7 @@ def state_array(name: str, value, n: int) -> np.ndarray:
         arr = arr.reshape(1)
     if arr.ndim == 0 or arr.shape[-1] != n:
         raise ValueError(
-            f"`{name}` must have shape (..., {n}) for a model with {n} link(s), "
+            f"`{name}` must have shape (..., {n}), "
             f"got shape {arr.shape}"
         )
     if not np.all(np.isfinite(arr)):

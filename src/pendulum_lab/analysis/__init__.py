@@ -56,6 +56,7 @@ from .linearization import (
     linearized_solution,
     normal_mode_frequencies,
     normal_modes,
+    rest_coordinates,
     rest_state_at_energy,
 )
 from .oscillations import dominant_frequencies, exact_period, oscillation_period, spectrum
@@ -104,6 +105,7 @@ __all__ = [
     "oscillation_period",
     "pendulum_name",
     "reference_solution",
+    "rest_coordinates",
     "rest_state_at_energy",
     "reversibility_error",
     "scipy_run",

@@ -43,8 +43,9 @@ def order_steps(method) -> tuple[float, ...]:
 
 
 def reference_solution(model: PendulumModel, theta0, omega0=None, *, t_end: float,
-                       rtol: float = 1e-13, p0=None) -> tuple[np.ndarray, np.ndarray]:
-    """``(theta, omega)`` at ``t_end`` by SciPy's DOP853 at a tight tolerance.
+                       rtol: float = 1e-13, p0=None,
+                       t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """``(theta, omega)`` at ``t0 + t_end`` by SciPy's DOP853 at a tight tolerance.
 
     Parameters
     ----------
@@ -52,28 +53,32 @@ def reference_solution(model: PendulumModel, theta0, omega0=None, *, t_end: floa
     theta0, omega0, p0 : array_like, shape (n,)
         The initial state (give ``omega0`` or ``p0``).
     t_end : float
-        Final time [s].
+        Length of the run [s].
     rtol : float
         Relative and absolute tolerance of DOP853.
+    t0 : float
+        The time the run starts at [s] (where the equations depend on the time).
     """
-    theta0, omega0 = velocity_state(model, theta0, omega0, p0)
-    sol = scipy_solution(model, theta0, omega0, t_end, rtol)
+    t0 = check.real_number("t0", t0)
+    theta0, omega0 = velocity_state(model, theta0, omega0, p0, t0=t0)
+    sol = scipy_solution(model, theta0, omega0, t_end, rtol, t0=t0)
     return sol.y[: model.n, -1], sol.y[model.n :, -1]
 
 
 def scipy_solution(model: PendulumModel, theta0: np.ndarray, omega0: np.ndarray, t_end: float,
-                   rtol: float, method: str = "DOP853"):
-    """``scipy.integrate.solve_ivp`` on ``(theta, omega)`` with ``atol = rtol`` (checked inputs).
+                   rtol: float, method: str = "DOP853", t0: float = 0.0):
+    """``scipy.integrate.solve_ivp`` on ``(theta, omega)`` over ``[t0, t0 + t_end]`` with
+    ``atol = rtol`` (checked inputs).
 
     The one place the package calls SciPy's adaptive solvers; ``method`` is
     a SciPy method name (``"DOP853"``, ``"RK45"``).
     """
     n = model.n
 
-    def rhs(_t, y):
-        return np.concatenate([y[n:], model.accelerations(y[:n], y[n:])])
+    def rhs(t, y):
+        return np.concatenate([y[n:], model.accelerations(y[:n], y[n:], t)])
 
-    return solve_ivp(rhs, (0.0, t_end), np.concatenate([theta0, omega0]), method=method,
+    return solve_ivp(rhs, (t0, t0 + t_end), np.concatenate([theta0, omega0]), method=method,
                      rtol=rtol, atol=rtol)
 
 
@@ -118,7 +123,7 @@ class OrderResult:
 
 def observed_order(model: PendulumModel, theta0, omega0=None, *, t_end: float = 1.0,
                    dts=(0.02, 0.01, 0.005, 0.0025), method="glrk4", p0=None,
-                   reference=None) -> OrderResult:
+                   reference=None, t0: float = 0.0) -> OrderResult:
     """Fit the slope of log(error) against log(dt) at ``t_end``.
 
     The error is the global error at ``t_end``, the max-norm distance in
@@ -138,14 +143,17 @@ def observed_order(model: PendulumModel, theta0, omega0=None, *, t_end: float = 
         Step sizes, ``> 0``, at least two different ones (a slope needs two).
     method : str or Method
     reference : tuple of ndarray, optional
-        ``(theta, omega)`` at ``t_end``.
+        ``(theta, omega)`` at ``t0 + t_end``.
+    t0 : float
+        The time the runs start at [s].
 
     Returns
     -------
     OrderResult
     """
     method = get_method(method)
-    theta0, omega0 = velocity_state(model, theta0, omega0, p0)
+    t0 = check.real_number("t0", t0)
+    theta0, omega0 = velocity_state(model, theta0, omega0, p0, t0=t0)
     dts = check.real_sequence("dts", dts)
     for dt in dts:
         check.positive_number("dts", float(dt))
@@ -154,11 +162,12 @@ def observed_order(model: PendulumModel, theta0, omega0=None, *, t_end: float = 
                          f"points), got {dts.tolist()}")
     t_end = check.positive_number("t_end", t_end)
     if reference is None:
-        reference = reference_solution(model, theta0, omega0, t_end=t_end)
+        reference = reference_solution(model, theta0, omega0, t_end=t_end, t0=t0)
     errors = []
     for dt in dts:
-        traj = simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method, keep="final")
-        errors.append(global_error(*final_state_at(traj, t_end), reference))
+        traj = simulate(model, theta0, omega0, t_end=t_end, dt=dt, method=method, keep="final",
+                        t0=t0)
+        errors.append(global_error(*final_state_at(traj, t0 + t_end), reference))
     errors = np.asarray(errors)
     slope = float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
     return OrderResult(dts, errors, slope, method.name, model)

@@ -222,9 +222,10 @@ def scipy_run(model: PendulumModel, theta0, omega0=None, *, t_end: float,
     sol = scipy_solution(model, theta0, omega0, t_end, rtol, method)
     wall = time.perf_counter() - start
     theta, omega = sol.y[:n].T, sol.y[n:].T
-    energy = model.energy(theta, omega)
-    return AdaptiveRun(f"{method}, rtol {rtol:g}", sol.t, theta, model.momenta(theta, omega),
-                       energy - energy[0], len(sol.t) - 1, int(sol.nfev), wall)
+    energy = model.energy(theta, omega, sol.t)
+    return AdaptiveRun(f"{method}, rtol {rtol:g}", sol.t, theta,
+                       model.momenta(theta, omega, sol.t), energy - energy[0], len(sol.t) - 1,
+                       int(sol.nfev), wall)
 
 
 def dop853_work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: float,
@@ -239,7 +240,7 @@ def dop853_work_precision(model: PendulumModel, theta0, omega0=None, *, t_end: f
         runs = [scipy_run(model, theta0, omega0, t_end=t_end, rtol=rtol, p0=p0)
                 for _ in range(repeats)]
         run = runs[0]
-        omega_end = model.velocities(run.theta[-1], run.p[-1])
+        omega_end = model.velocities(run.theta[-1], run.p[-1], run.t[-1])
         points.append(WorkPrecision("DOP853", float(rtol),
                                     float(np.max(np.abs(run.energy_error))),
                                     global_error(run.theta[-1], omega_end, reference),
@@ -313,7 +314,9 @@ def errors_shrink(errors) -> bool:
 
 
 def pendulum_name(model: PendulumModel) -> str:
-    """``"simple"``, ``"double"``, or ``"n=3"`` and so on."""
+    """``"simple"``, ``"double"``, or ``"n=3"`` and so on; a system's own name otherwise."""
+    if not model.is_chain:
+        return model.name
     return {1: "simple", 2: "double"}.get(model.n, f"n={model.n}")
 
 
@@ -356,14 +359,14 @@ def compare_trajectory(model: PendulumModel, traj: Trajectory, *, order_t_end: f
         raise ValueError("`traj` must be a single trajectory (angles of shape (N+1, n)), "
                          f"got angles of shape {traj.theta.shape}")
     if traj.theta.shape[1] != model.n:
-        raise ValueError(f"`traj` has {traj.theta.shape[1]} angle(s) but `model` has "
-                         f"{model.n} link(s)")
+        raise ValueError(f"`traj` has {traj.theta.shape[1]} coordinate(s) but `model` has "
+                         f"{model.n}")
     check_dt = check.positive_number("check_dt", check_dt)
-    theta0, omega0, p0 = traj.theta[0], traj.omega[0], traj.p[0]
+    theta0, omega0, p0, t0 = traj.theta[0], traj.omega[0], traj.p[0], float(traj.t[0])
     if order_dts is None:
         order_dts = order_steps(traj.method)
     order = observed_order(model, theta0, omega0, t_end=order_t_end, dts=order_dts,
-                           method=traj.method, reference=reference)
+                           method=traj.method, reference=reference, t0=t0)
     first, last = energy_growth(traj)
     return ComparisonRow(
         pendulum=pendulum_name(model),
@@ -375,9 +378,9 @@ def compare_trajectory(model: PendulumModel, traj: Trajectory, *, order_t_end: f
         energy_last=last,
         max_relative_energy_error=float(np.max(np.abs(traj.relative_energy_error))),
         symplecticity_defect=symplecticity_defect(model, theta0, p0=p0, dt=check_dt,
-                                                  method=traj.method),
+                                                  method=traj.method, t0=t0),
         reversibility_error=reversibility_error(model, theta0, p0=p0, dt=check_dt,
-                                                method=traj.method),
+                                                method=traj.method, t0=t0),
         t_end=float(traj.t[-1]),
         dt=traj.dt,
         wall_time=traj.wall_time,

@@ -30,6 +30,7 @@ from ..integrators import get_method
 from ..model import require_model
 from ..model.pendulum import PendulumModel
 from ..plot_dispatch import plot_with
+from .linearization import rest_coordinates
 from .structure import step_jacobian
 
 __all__ = [
@@ -114,7 +115,7 @@ def linear_decay(model: PendulumModel, method, dts) -> LinearDecay:
     dts = check.real_sequence("dts", dts)
     if np.any(dts <= 0):
         raise ValueError("`dts` must be positive")
-    rest = np.zeros(model.n)  # every link hanging straight down
+    rest = rest_coordinates(model)
     jacobians = [step_jacobian(model, rest, np.zeros(model.n), dt=float(dt), method=name)
                  for dt in dts]
     field = model.jacobian(rest, np.zeros(model.n))

@@ -54,11 +54,12 @@ class StageIteration:
 
 def stage_contraction(model: PendulumModel, theta0, omega0=None, *, dt: float,
                       tableau: ButcherTableau = GAUSS4_TABLEAU, p0=None,
-                      max_sweeps: int = 60) -> StageIteration:
+                      max_sweeps: int = 60, t0: float = 0.0) -> StageIteration:
     """Run the stage iteration of one step and measure its contraction per sweep.
 
-    The iteration is the library's (``K <- F(K)`` from ``K_i = f(y)``, on
-    Hamilton's equations in ``(theta, p)``), written out in NumPy so that
+    The iteration is the library's (``K <- F(K)`` from ``K_i = f(t0 + c_i h, y)``, on
+    the vector field in ``(theta, p)`` that the integrators step, forces and
+    time included), written out in NumPy so that
     every increment can be recorded; it stops at round-off, when the
     increments grow a million-fold (divergence) or after ``max_sweeps``.
 
@@ -73,6 +74,8 @@ def stage_contraction(model: PendulumModel, theta0, omega0=None, *, dt: float,
         An implicit tableau; two-stage Gauss-Legendre by default.
     max_sweeps : int
         Upper limit of sweeps, ``>= 3``.
+    t0 : float
+        The time the step starts at [s]; stage ``i`` is evaluated at ``t0 + c_i dt``.
 
     Returns
     -------
@@ -86,7 +89,7 @@ def stage_contraction(model: PendulumModel, theta0, omega0=None, *, dt: float,
     >>> bool(1.6 < big.contraction / small.contraction < 2.5)   # about 2: proportional to h
     True
     """
-    theta0, p0 = canonical_state(model, theta0, omega0, p0)
+    theta0, p0 = canonical_state(model, theta0, omega0, p0, t0=t0)
     if theta0.ndim != 1:
         raise ValueError(f"`theta0` must have shape (n,) (one state), got {theta0.shape}")
     dt = check.positive_number("dt", dt)
@@ -96,11 +99,12 @@ def stage_contraction(model: PendulumModel, theta0, omega0=None, *, dt: float,
     n = model.n
     y = np.concatenate([theta0, p0])
 
-    def field(states):
-        theta, p = states[:, :n], states[:, n:]
-        return np.concatenate([model.dH_dp(theta, p), -model.dH_dq(theta, p)], axis=1)
+    times = t0 + dt * np.asarray(tableau.c, dtype=float)
 
-    slopes = np.tile(field(y[None]), (tableau.stages, 1))
+    def field(states):
+        return np.concatenate(model.vector_field(states[:, :n], states[:, n:], times), axis=1)
+
+    slopes = field(np.tile(y, (tableau.stages, 1)))
     # increments below this are round-off of the slopes
     floor = 1e3 * np.finfo(float).eps * np.max(np.abs(slopes))
     increments = []
@@ -120,5 +124,5 @@ def stage_contraction(model: PendulumModel, theta0, omega0=None, *, dt: float,
     ratios = increments[1:][usable] / increments[:-1][usable]
     contraction = float(np.exp(np.mean(np.log(ratios)))) if ratios.size >= 2 else np.nan
     rho_a = float(np.max(np.abs(np.linalg.eigvals(tableau.a))))
-    rho_f = float(np.max(np.abs(np.linalg.eigvals(model.jacobian(theta0, p0)))))
+    rho_f = float(np.max(np.abs(np.linalg.eigvals(model.jacobian(theta0, p0, t0)))))
     return StageIteration(increments, contraction, dt * rho_a * rho_f, dt)

@@ -13,7 +13,7 @@ from scipy.linalg import expm
 
 from .. import validation as check
 from ..driver.simulate import velocity_state
-from ..model import require_model
+from ..model import require_chain, require_model
 from ..model.pendulum import PendulumModel
 from ..symbolic.mechanics import Equilibrium
 
@@ -23,6 +23,7 @@ __all__ = [
     "linearized_solution",
     "normal_mode_frequencies",
     "normal_modes",
+    "rest_coordinates",
     "rest_state_at_energy",
 ]
 
@@ -35,9 +36,13 @@ def find_equilibrium(model: PendulumModel, equilibrium=None) -> Equilibrium:
     model : PendulumModel
     equilibrium : str or Equilibrium, optional
         A name from ``[eq.name for eq in model.chain.equilibria]`` or one of
-        those objects.
+        those objects. For a system that is not a chain, a name from
+        ``[eq.name for eq in model.equilibria]``, or a point ``q*`` (checked);
+        by default the equilibrium of least potential energy.
     """
     require_model(model)
+    if not model.is_chain:
+        return _system_equilibrium(model, equilibrium)
     if equilibrium is None:
         return model.chain.equilibria[0]
     if isinstance(equilibrium, str):
@@ -46,6 +51,26 @@ def find_equilibrium(model: PendulumModel, equilibrium=None) -> Equilibrium:
         return equilibrium
     names = [eq.name for eq in model.chain.equilibria]
     raise TypeError(f"`equilibrium` must be a name in {names} or one of model.chain.equilibria")
+
+
+def _system_equilibrium(model, equilibrium) -> Equilibrium:
+    """A system's equilibrium: by name, as one, as a point ``q*``, or the lowest."""
+    found = model.equilibria
+    if equilibrium is None or isinstance(equilibrium, str):
+        if not found:
+            raise ValueError(f"SymPy finds no equilibrium of {model.name}: give one as a point, "
+                             "`equilibrium=(q1, q2, ...)`")
+        if equilibrium is None:
+            return found[0]
+        for eq in found:
+            if eq.name == equilibrium:
+                return eq
+        raise ValueError(f"`equilibrium` must be one of {[eq.name for eq in found]} or a point "
+                         f"(q1, ..., q{model.n}), got {equilibrium!r}")
+    if isinstance(equilibrium, Equilibrium):
+        return equilibrium
+    point = check.state_vector("equilibrium", equilibrium, model.n)
+    return model.system.equilibrium_at(tuple(point), model.parameter_values)
 
 
 def equilibrium_angles(model: PendulumModel, equilibrium=None) -> np.ndarray:
@@ -60,8 +85,23 @@ def equilibrium_angles(model: PendulumModel, equilibrium=None) -> np.ndarray:
     return np.array([float(a) for a in find_equilibrium(model, equilibrium).angles])
 
 
+def rest_coordinates(model: PendulumModel) -> np.ndarray:
+    """Where the step-stability tools linearise: the bottom, shape ``(n,)``.
+
+    Every link straight down (zeros) for a chain, damped or driven as well;
+    for a system that is not a chain, its equilibrium of least potential
+    energy (the elastic pendulum's bob hangs at the spring's stretched length).
+    """
+    require_model(model)
+    return np.zeros(model.n) if model.is_chain else equilibrium_angles(model)
+
+
 def normal_modes(model: PendulumModel) -> tuple[np.ndarray, np.ndarray]:
     """Small-oscillation angular frequencies [rad/s] and shapes about the all-down equilibrium.
+
+    For a system that is not a chain, about its equilibrium of least potential
+    energy; a coordinate that equilibrium leaves free (a cart's position) gives
+    a mode of frequency 0, and each shape is scaled so that its largest entry is 1.
 
     Near the bottom ``theta'' = K theta`` with ``K = M^-1 dF/dq``; a normal mode
     ``theta(t) = a cos(omega t) v`` needs ``K v = -omega^2 v``. So the
@@ -90,11 +130,21 @@ def normal_modes(model: PendulumModel) -> tuple[np.ndarray, np.ndarray]:
     ratio = np.array(down.stiffness_ratio.subs(model.parameter_values), dtype=float)
     mus, vectors = np.linalg.eig(ratio)
     mus, vectors = mus.real, vectors.real
-    if np.any(mus >= 0):
-        raise ValueError(f"the all-down equilibrium is not a center for g = {model.g}")
     order = np.argsort(-mus)  # mu closest to 0 first: the slowest mode
-    shapes = vectors[:, order].T
-    return np.sqrt(-mus[order]), shapes / shapes[:, :1]
+    mus, shapes = mus[order], vectors[:, order].T
+    if model.is_chain:
+        if np.any(mus >= 0):
+            raise ValueError(f"the all-down equilibrium is not a center for g = {model.g}")
+        return np.sqrt(-mus), shapes / shapes[:, :1]
+    # A free coordinate (the cart's x) gives mu = 0: a mode of frequency 0, a drift.
+    free = np.abs(mus) <= 1e-9 * max(1.0, float(np.max(np.abs(mus))))
+    if np.any(mus[~free] > 0):
+        raise ValueError(f"the equilibrium {down.name} of {model.name} is unstable "
+                         f"(eigenvalues {mus.tolist()} of M^-1 dF/dq, one positive), so it has "
+                         "no normal modes")
+    # Each shape scaled so that its largest entry is +1 (a coordinate may not move at all).
+    largest = shapes[np.arange(len(shapes)), np.argmax(np.abs(shapes), axis=1)]
+    return np.sqrt(np.where(free, 0.0, -mus)), shapes / largest[:, None]
 
 
 def normal_mode_frequencies(model: PendulumModel) -> np.ndarray:
@@ -187,6 +237,7 @@ def rest_state_at_energy(model: PendulumModel, energy: float) -> np.ndarray:
     >>> bool(np.allclose(theta, np.pi / 2)), bool(abs(dp.potential_energy(theta)) < 1e-12)
     (True, True)
     """
+    require_chain(model, "a state at rest with all links at one angle is a chain's")
     energy = check.real_number("energy", energy)
     depth = -float(model.potential_energy(np.zeros(model.n)))
     if depth <= 0:

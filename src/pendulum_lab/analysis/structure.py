@@ -28,6 +28,7 @@ from .. import validation as check
 from ..driver.simulate import canonical_state, step
 from ..model import require_model
 from ..model.pendulum import PendulumModel
+from .linearization import rest_coordinates
 
 __all__ = [
     "amplification",
@@ -102,7 +103,8 @@ def symplectic_form_defect(matrix) -> float:
 
 
 def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4",
-                  p0=None, eps: float = 1e-6, variables: str = "canonical") -> np.ndarray:
+                  p0=None, eps: float = 1e-6, variables: str = "canonical",
+                  t0: float = 0.0) -> np.ndarray:
     """Jacobian of one step ``(theta, p) -> (theta1, p1)`` by central differences.
 
     Parameters
@@ -119,6 +121,9 @@ def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, metho
         The coordinates the step is seen in: ``(theta, p)``, or ``(theta,
         omega)`` with ``omega = M(theta)^-1 p`` (the same map, other
         coordinates; symplectic in both only when ``M`` is constant).
+    t0 : float
+        The time the step starts at [s] (it matters where the equations
+        depend on the time: a drive, a moving pivot).
 
     Returns
     -------
@@ -132,26 +137,27 @@ def step_jacobian(model: PendulumModel, theta0, omega0=None, *, dt: float, metho
     1.000981
     """
     n = model.n
-    theta0, p0 = canonical_state(model, theta0, omega0, p0)
+    theta0, p0 = canonical_state(model, theta0, omega0, p0, t0=t0)
     if theta0.ndim != 1:
         raise ValueError(f"`theta0` must have shape (n,) (one state), got {theta0.shape}")
     if check.choice("variables", variables, ("canonical", "velocity")) == "velocity":
 
         def one_step(z):
-            theta1, p1 = step(model, z[:n], z[n:], dt=dt, method=method)
-            return np.concatenate([theta1, model.velocities(theta1, p1)])
+            theta1, p1 = step(model, z[:n], z[n:], dt=dt, method=method, t0=t0)
+            return np.concatenate([theta1, model.velocities(theta1, p1, t=t0 + dt)])
 
         return finite_difference_jacobian(
-            one_step, np.concatenate([theta0, model.velocities(theta0, p0)]), eps)
+            one_step, np.concatenate([theta0, model.velocities(theta0, p0, t=t0)]), eps)
 
     def one_step(z):
-        return np.concatenate(step(model, z[:n], p0=z[n:], dt=dt, method=method))
+        return np.concatenate(step(model, z[:n], p0=z[n:], dt=dt, method=method, t0=t0))
 
     return finite_difference_jacobian(one_step, np.concatenate([theta0, p0]), eps)
 
 
 def symplecticity_defect(model: PendulumModel, theta0, omega0=None, *, dt: float,
-                         method="glrk4", p0=None, variables: str = "canonical") -> float:
+                         method="glrk4", p0=None, variables: str = "canonical",
+                         t0: float = 0.0) -> float:
     """``max |Psi^T J Psi - J|`` for the Jacobian ``Psi`` of one step in ``(theta, p)``.
 
     Zero (to the finite-difference accuracy, about 1e-10) for a symplectic map.
@@ -159,18 +165,19 @@ def symplecticity_defect(model: PendulumModel, theta0, omega0=None, *, dt: float
     step is measured as a map of ``(theta, omega)``.
     """
     return symplectic_form_defect(step_jacobian(model, theta0, omega0, dt=dt, method=method,
-                                                p0=p0, variables=variables))
+                                                p0=p0, variables=variables, t0=t0))
 
 
 def reversibility_error(model: PendulumModel, theta0, omega0=None, *, dt: float,
-                        method="glrk4", p0=None) -> float:
+                        method="glrk4", p0=None, t0: float = 0.0) -> float:
     """``max |Phi_{-h}(Phi_h(z)) - z|``: zero for a symmetric (time-reversible) method.
 
-    Arguments as for :func:`step_jacobian`; ``z = (theta, p)``.
+    Arguments as for :func:`step_jacobian`; ``z = (theta, p)``. The step back
+    starts where the first ended, at ``t0 + dt``.
     """
-    q, p = canonical_state(model, theta0, omega0, p0)
-    q1, p1 = step(model, q, p0=p, dt=dt, method=method)
-    q2, p2 = step(model, q1, p0=p1, dt=-dt, method=method)
+    q, p = canonical_state(model, theta0, omega0, p0, t0=t0)
+    q1, p1 = step(model, q, p0=p, dt=dt, method=method, t0=t0)
+    q2, p2 = step(model, q1, p0=p1, dt=-dt, method=method, t0=t0 + dt)
     return float(max(np.max(np.abs(q2 - q)), np.max(np.abs(p2 - p))))
 
 
@@ -208,10 +215,11 @@ def amplification(model: PendulumModel, dts, *, method="glrk4", eps: float = 1e-
     """
     require_model(model)
     dts = np.atleast_1d(np.asarray(dts, dtype=float))
-    rest = np.zeros(model.n)
+    rest = rest_coordinates(model)
     factors = [
         np.max(np.abs(np.linalg.eigvals(
-            step_jacobian(model, rest, p0=rest, dt=dt, method=method, eps=eps))))
+            step_jacobian(model, rest, p0=np.zeros(model.n), dt=dt, method=method,
+                          eps=eps))))
         for dt in dts
     ]
     return np.array(factors)

@@ -31,7 +31,7 @@ from ..driver.cluster import check_client, map_members, portable_method
 from ..driver.segments import default_segment_steps
 from ..driver.simulate import check_run_length
 from ..integrators import get_method
-from ..model import FAMILY_PARAMETERS, require_model
+from ..model import FAMILY_PARAMETERS, require_chain
 from ..model.angles import wrap_angle
 from ..model.pendulum import PendulumModel
 from ..plot_dispatch import plot_with
@@ -317,7 +317,9 @@ def bifurcation_diagram(
     >>> diagram.periods.tolist()  # period 1, then period 2 past the first doubling
     [[1], [2]]
     """
-    require_model(model)
+    require_chain(model, "the diagram runs a family of models in one ensemble, which only "
+                  "chains have; follow a system's orbits with continue_orbit or "
+                  "locate_bifurcation, which vary its own parameters")
     parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
     values = check.real_sequence("values", values)
     variable = check.choice("variable", variable, ("omega", "theta"))

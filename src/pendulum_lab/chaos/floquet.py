@@ -64,6 +64,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import sympy as sp
 from scipy.optimize import brentq
 
 from .. import validation as check
@@ -286,7 +287,7 @@ def periodic_orbit(
     max_iterations = check.integer_at_least("max_iterations", max_iterations, 1)
     t0 = check.real_number("t0", t0)
     method = get_method(method)
-    theta, p = canonical_state(model, theta0, omega0, p0)
+    theta, p = canonical_state(model, theta0, omega0, p0, t0=t0)
     if theta.shape != (model.n,):
         raise ValueError(f"`theta0` must be one state of shape ({model.n},), got {theta.shape}")
     if symmetric and (periods % 2 == 0 or steps % 2):
@@ -318,6 +319,29 @@ def periodic_orbit(
 
 def _model_at(model: PendulumModel, parameter: str, value: float) -> PendulumModel:
     return model.replace(**{parameter: value})
+
+
+def continuation_parameter(model: PendulumModel, parameter) -> str:
+    """``parameter`` if the orbit tools can vary it, else a ``ValueError`` saying which can.
+
+    A chain's are :data:`~pendulum_lab.model.FAMILY_PARAMETERS`. A system's are its own
+    parameters except those its time dependence reads (the shaking frequency ``w`` of the
+    Kapitza pendulum): the model's period was given with it, and would no longer be the
+    period of the equations.
+    """
+    if model.is_chain:
+        return check.choice("parameter", parameter, FAMILY_PARAMETERS)
+    system = model.system
+    clock = set()
+    for term in system.lagrangian.atoms(sp.Function):
+        if system.t in term.free_symbols:
+            clock |= {str(s) for s in term.free_symbols - {system.t}}
+    allowed = [str(s) for s in system.parameters if str(s) not in clock]
+    if parameter in clock:
+        raise ValueError(f"`parameter` {parameter!r} sets how {system.name} depends on the time "
+                         "(its period), so it cannot be varied along an orbit here: build one "
+                         f"model per value instead; the parameters that can vary are {allowed}")
+    return check.choice("parameter", parameter, allowed)
 
 
 def _bracket(bracket) -> tuple[float, float]:
@@ -356,6 +380,8 @@ def continue_orbit(
     ----------
     model : PendulumModel
     parameter : {"damping", "drive_amplitude", "drive_frequency", "g"}
+        For a system that is not a chain, one of its own parameters (see
+        :func:`continuation_parameter`).
     values : array_like, shape (V,)
     theta0, omega0, p0, periods, t0, steps_per_period, method, tolerance, symmetric
         As for :func:`periodic_orbit`.
@@ -366,7 +392,7 @@ def continue_orbit(
         One per value.
     """
     require_model(model)
-    parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
+    parameter = continuation_parameter(model, parameter)
     values = check.real_sequence("values", values)
     options = dict(periods=periods, t0=t0, steps_per_period=steps_per_period, method=method,
                    tolerance=tolerance, symmetric=symmetric)
@@ -445,6 +471,8 @@ def locate_bifurcation(
     ----------
     model : PendulumModel
     parameter : {"damping", "drive_amplitude", "drive_frequency", "g"}
+        For a system that is not a chain, one of its own parameters (see
+        :func:`continuation_parameter`).
     bracket : (float, float)
         ``(start, stop)``: where the orbit is known and where to stop looking.
     theta0, omega0, p0 : array_like, shape (n,)
@@ -477,7 +505,7 @@ def locate_bifurcation(
     ('period doubling', 1.0664, -1.0)
     """
     require_model(model)
-    parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
+    parameter = continuation_parameter(model, parameter)
     if multiplier not in (-1, 1):
         raise ValueError(f"`multiplier` must be -1 (period doubling) or +1 (fold or pitchfork), "
                          f"got {multiplier!r}")
@@ -617,6 +645,8 @@ def period_doubling_cascade(
     model : PendulumModel
         A driven model.
     parameter : {"damping", "drive_amplitude", "drive_frequency", "g"}
+        For a system that is not a chain, one of its own parameters (see
+        :func:`continuation_parameter`).
     bracket : (float, float)
         ``(start, stop)``: the attractor at ``start`` must be the first
         periodic orbit of the cascade, and the doublings must lie before
@@ -652,7 +682,7 @@ def period_doubling_cascade(
     ([1, 2], [1.0664, 1.0793])
     """
     require_model(model)
-    parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
+    parameter = continuation_parameter(model, parameter)
     start, stop = _bracket(bracket)
     doublings = check.integer_at_least("doublings", doublings, 1)
     settle_periods = check.integer_at_least("settle_periods", settle_periods, 1)
@@ -668,7 +698,7 @@ def period_doubling_cascade(
         require_finite(run, "period_doubling_cascade")
         return run.theta[-1], run.p[-1]
 
-    theta, p = canonical_state(model, theta0, omega0, p0)
+    theta, p = canonical_state(model, theta0, omega0, p0, t0=t0)
     theta, p = settle(start, theta, p, 1)
     options = dict(t0=t0, method=method, tolerance=tolerance, xtol=xtol)
     here, periods, n = start, 1, model.n

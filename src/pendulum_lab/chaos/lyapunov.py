@@ -161,7 +161,7 @@ class LyapunovEstimate:
         return plot_with("plot_lyapunov", self, ax=ax, label=label, **kwargs)
 
 
-def _prepare(model, theta0, omega0, p0, t_end, dt, name: str, interval):
+def _prepare(model, theta0, omega0, p0, t_end, dt, name: str, interval, t0):
     """Validated start of an estimate: flat states, the step and whole intervals of the run.
 
     Returns
@@ -177,7 +177,7 @@ def _prepare(model, theta0, omega0, p0, t_end, dt, name: str, interval):
         Steps per interval (the checked argument ``name``) and how many whole
         intervals the run holds.
     """
-    theta0, p0 = canonical_state(model, theta0, omega0, p0)
+    theta0, p0 = canonical_state(model, theta0, omega0, p0, t0=t0)
     t_end, dt, n_steps = time_grid(t_end, dt)
     interval = check.integer_at_least(name, interval, 1)
     count = n_steps // interval
@@ -267,7 +267,7 @@ def lyapunov_benettin(
     True
     """
     model, theta0, p0, batch, dt, every, intervals = _prepare(
-        model, theta0, omega0, p0, t_end, dt, "renormalize_every", renormalize_every
+        model, theta0, omega0, p0, t_end, dt, "renormalize_every", renormalize_every, t0
     )
     delta = check.positive_number("delta", delta)
     seed = check.seed("seed", seed)
@@ -337,7 +337,7 @@ def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every,
     """
     start = time.perf_counter()
     model, theta0, p0, batch, dt, every, blocks = _prepare(
-        model, theta0, omega0, p0, t_end, dt, "save_every", save_every
+        model, theta0, omega0, p0, t_end, dt, "save_every", save_every, t0
     )
     method = get_method(method)
     client = check_client(client)

@@ -104,8 +104,12 @@ def section_states(
     """
     require_model(model)
     n = model.n
+    if not model.is_autonomous:
+        raise ValueError(f"`model` ({model!r}) depends on the time, so its energy is not "
+                         "constant and no energy level fixes the states; start from states of "
+                         "your own, or take a stroboscopic section (stroboscopic_section)")
     if n < 2:
-        raise ValueError("`model` must have at least two links for a Poincare section")
+        raise ValueError("`model` must have at least two coordinates for a Poincare section")
     energy = check.real_number("energy", energy)
     link = check.index_below("link", link, n)
     value = check.real_number("value", value)
@@ -206,6 +210,7 @@ def poincare_section(
     direction: int = 1,
     landing: str = "newton",
     progress: bool | None = None,
+    t0: float = 0.0,
 ) -> PoincareSection:
     """Crossings of ``theta_link = value (mod 2 pi)`` located to round-off.
 
@@ -240,7 +245,7 @@ def poincare_section(
     model : PendulumModel
     theta0, omega0, p0 : array_like, shape (..., n)
         Initial states (for example from :func:`section_states`).
-    t_end, dt, method
+    t_end, dt, method, t0
         As for :func:`~pendulum_lab.simulate`.
     link : int
         The link whose angle defines the surface (0-based).
@@ -294,7 +299,7 @@ def poincare_section(
         raise ValueError(f"landing='henon' needs a method in canonical variables, got "
                          f"`method` {get_method(method).name!r}; use landing='newton'")
     run = simulate_segments(model, theta0, omega0, t_end=t_end, dt=dt, method=method, p0=p0,
-                            progress=progress, label="Poincare section")
+                            progress=progress, label="Poincare section", t0=t0)
     found = {name: [] for name in ("t", "theta", "p", "orbit", "residual", "landing_steps")}
     for segment in run:
         require_finite(segment, "poincare_section")
@@ -340,15 +345,18 @@ def _crossings(model, segment, link, value, direction, landing, found):
         found["landing_steps"].extend(np.zeros(len(hits), dtype=int))
         return
     if landing == "henon":
-        theta, p, elapsed = henon_step(model, segment.theta[steps, orbits],
-                                       p0=segment.p[steps, orbits], link=link,
-                                       level=hits.level, method=segment.method)
-        found["t"].extend(segment.t[steps] + elapsed)
-        found["theta"].extend(theta)
-        found["p"].extend(p)
-        found["orbit"].extend(orbits)
-        found["residual"].extend(np.abs(theta[:, link] - hits.level))
-        found["landing_steps"].extend(np.ones(len(hits), dtype=int))
+        for k in np.unique(steps):  # one call per start time (the equations may depend on it)
+            rows = steps == k
+            theta, p, elapsed = henon_step(model, segment.theta[k, orbits[rows]],
+                                           p0=segment.p[k, orbits[rows]], link=link,
+                                           level=hits.level[rows], method=segment.method,
+                                           t0=float(segment.t[k]))
+            found["t"].extend(segment.t[k] + elapsed)
+            found["theta"].extend(theta)
+            found["p"].extend(p)
+            found["orbit"].extend(orbits[rows])
+            found["residual"].extend(np.abs(theta[:, link] - hits.level[rows]))
+            found["landing_steps"].extend(np.ones(int(rows.sum()), dtype=int))
         return
     dt = segment.dt
     guess = hits.fraction(dt * segment.omega[steps, orbits, link],
@@ -359,10 +367,10 @@ def _crossings(model, segment, link, value, direction, landing, found):
 
         def advance(tau, theta=theta, p=p, t_k=t_k):
             if tau == 0.0:
-                return theta, p
-            return step(model, theta, p0=p, dt=tau, method=segment.method, t0=t_k)
+                return theta, p, t_k
+            return (*step(model, theta, p0=p, dt=tau, method=segment.method, t0=t_k), t_k + tau)
 
-        miss, (q, p_landed), tau, used = land(
+        miss, (q, p_landed, _), tau, used = land(
             advance,
             lambda state, target=target: state[0][link] - target,
             lambda state: model.dH_dp(*state)[link],
@@ -466,6 +474,9 @@ def landing_errors(
     True
     """
     require_model(model)
+    if not model.is_autonomous:
+        raise ValueError(f"`model` ({model!r}) depends on the time: landing_errors measures "
+                         "landings on an autonomous flow (it steps back from t = 0)")
     landing = check.choice("landing", landing, ("newton", "henon"))
     dt = check.positive_number("dt", dt)
     lead = check.number_in("lead", lead, 0.0, 1.0, open_low=True)

@@ -66,6 +66,7 @@ def separation(
     delta: float = 1e-9,
     seed=0,
     progress: bool | None = None,
+    t0: float = 0.0,
 ) -> Separation:
     """Distance versus time between two trajectories that start ``delta`` apart.
 
@@ -80,7 +81,7 @@ def separation(
     model : PendulumModel
     theta0, omega0, p0 : array_like, shape (..., n)
         The initial state, as for :func:`~pendulum_lab.simulate`.
-    t_end, dt, method, save_every, progress
+    t_end, dt, method, save_every, progress, t0
         As for :func:`~pendulum_lab.simulate`.
     delta : float
         Initial distance, ``> 0``.
@@ -99,11 +100,11 @@ def separation(
     >>> bool(sep.distance[-1] > 100 * sep.delta)
     True
     """
-    theta0, p0 = canonical_state(model, theta0, omega0, p0)
+    theta0, p0 = canonical_state(model, theta0, omega0, p0, t0=t0)
     delta = check.positive_number("delta", delta)
     theta1, p1 = perturbed(theta0, p0, delta, check.seed("seed", seed))
     traj = simulate(model, np.stack([theta0, theta1]), p0=np.stack([p0, p1]), t_end=t_end,
-                    dt=dt, method=method, save_every=save_every, progress=progress)
+                    dt=dt, method=method, save_every=save_every, progress=progress, t0=t0)
     distance = phase_distance(
         traj.theta[:, 0], traj.p[:, 0], traj.theta[:, 1], traj.p[:, 1], wrap=True
     )

@@ -161,7 +161,7 @@ class SegmentedRun:
         if self._reduction is not None:
             self._theta = self._reduction.reduced.copy()
         self._state = to_method_variables(self.model, method, self._theta,
-                                           start.reshape(-1, model.n), given_momenta)
+                                           start.reshape(-1, model.n), given_momenta, t=t0)
         # What the method carries from step to step (its last stage slopes, the
         # rounding it compensates): kept across segments, so that the segmented
         # run is the one long run to the last bit.

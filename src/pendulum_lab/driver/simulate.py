@@ -454,38 +454,41 @@ def run_arguments(model, theta0, omega0, p0, t_end, dt, method, save_every, t0,
     return method, theta0, start, grid, save_every, t0
 
 
-def canonical_state(model: PendulumModel, theta0, omega0=None, p0=None):
+def canonical_state(model: PendulumModel, theta0, omega0=None, p0=None, *, t0: float = 0.0):
     """The initial state ``(theta0, p0)`` in canonical variables, validated.
 
-    Give exactly one of ``omega0`` (converted by ``p = M(theta) omega``) and
-    ``p0`` (taken as it is).
+    Give exactly one of ``omega0`` (converted by ``p = M(theta) omega``, or
+    ``M(theta, t0) omega + b(theta, t0)`` where the equations depend on the
+    time) and ``p0`` (taken as it is).
 
     Returns
     -------
     theta0, p0 : ndarray, shape (..., n)
     """
     require_model(model)
+    t0 = check.real_number("t0", t0)
     theta0, start = initial_state(model, theta0, omega0, p0)
-    return theta0, (start if p0 is not None else model.momenta(theta0, start))
+    return theta0, (start if p0 is not None else model.momenta(theta0, start, t=t0))
 
 
 def velocity_state(model: PendulumModel, theta0, omega0=None, p0=None, *,
-                   single: bool = False):
+                   single: bool = False, t0: float = 0.0):
     """The initial state ``(theta0, omega0)`` in velocity variables, validated.
 
     Give exactly one of ``omega0`` (taken as it is) and ``p0`` (converted by
-    ``omega = M(theta)^-1 p``). With ``single``, it must be one state of shape
-    ``(n,)``.
+    ``omega = M(theta)^-1 p``, at the time ``t0`` where the equations depend
+    on it). With ``single``, it must be one state of shape ``(n,)``.
 
     Returns
     -------
     theta0, omega0 : ndarray, shape (..., n)
     """
     require_model(model)
+    t0 = check.real_number("t0", t0)
     theta0, start = initial_state(model, theta0, omega0, p0)
     if single and theta0.ndim != 1:
         raise ValueError("`theta0` and `omega0` must have shape (n,) (one trajectory)")
-    return theta0, (start if p0 is None else model.velocities(theta0, start))
+    return theta0, (start if p0 is None else model.velocities(theta0, start, t=t0))
 
 
 def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4", p0=None,

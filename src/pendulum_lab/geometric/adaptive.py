@@ -75,7 +75,7 @@ __all__ = [
 
 
 def _start(model, theta0, p0, links=None):
-    model = conservative_model(model, links)
+    model = conservative_model(model, links, chain=True)
     theta0 = check.state_array("theta0", theta0, model.n)
     p0 = check.state_array("p0", p0, model.n)
     if theta0.ndim != 1 or p0.ndim != 1:
@@ -160,7 +160,7 @@ def step_density(model: PendulumModel, theta, p, frequency: float | None = None)
     ``alpha``; it changes sign with ``p``, which makes the adaptive method
     reversible.
     """
-    model = conservative_model(model)
+    model = conservative_model(model, chain=True)
     w2 = (model.g / model.lengths[0] if frequency is None
           else check.positive_number("frequency", frequency) ** 2)
     theta = check.state_array("theta", theta, model.n)
@@ -530,7 +530,7 @@ def level_spreads(model: PendulumModel, starts, *, lengths, epsilon: float,
     -------
     LevelSpreads
     """
-    model = conservative_model(model)
+    model = conservative_model(model, chain=True)
     starts = check.state_array("starts", starts, model.n)
     if starts.ndim != 2:
         raise ValueError(f"`starts` must have shape (s, {model.n}), got {starts.shape}")

@@ -102,7 +102,7 @@ def _hamiltonian_method(model: PendulumModel, method) -> str:
     """
     name = get_method(method).name
     if name in VELOCITY_TWINS:
-        if model.n == 1:
+        if model.n == 1 and model.is_chain:
             return VELOCITY_TWINS[name]
         raise ValueError(
             f"`method` {name!r} has no modified Hamiltonian for n = {model.n}: it steps "
@@ -385,7 +385,7 @@ def modified_equation(model: PendulumModel, method, order: int) -> list[sp.Matri
     >>> modified_equation(pl.simple_pendulum(), "explicit_euler", 1)[1].T
     Matrix([[g*sin(theta)/(2*l), g*p*cos(theta)/(2*l)]])
     """
-    model = conservative_model(model, (1,))
+    model = conservative_model(model, (1,), chain=True)
     name = get_method(method).name
     name = VELOCITY_TWINS.get(name, name)
     if name == "glrk8":
@@ -588,7 +588,7 @@ def first_dissipative_term(model: PendulumModel, method, max_power: int = 6) -> 
     >>> first_dissipative_term(pl.simple_pendulum(), "explicit_euler").power
     1
     """
-    model = conservative_model(model, (1,))
+    model = conservative_model(model, (1,), chain=True)
     max_power = _order(max_power, MAX_FIELD_ORDER - 1, "for the modified equation")
     theta, p = model.chain.q[0], model.chain.p[0]
     fields = modified_equation(model, method, max_power)
@@ -671,7 +671,7 @@ def mean_energy_rate(model: PendulumModel, method, amplitude: float, power: int)
     >>> bool(abs(rate) < 1e-12)      # a symplectic method's terms do not drain energy
     True
     """
-    model = conservative_model(model, (1,))
+    model = conservative_model(model, (1,), chain=True)
     power = _order(power, MAX_FIELD_ORDER - 1, "for the modified equation")
     if power < 1:
         raise ValueError("`power` must be >= 1 (power 0 is Hamilton's field, which keeps H)")

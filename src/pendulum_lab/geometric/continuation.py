@@ -161,7 +161,7 @@ def variational_root_branch(model: PendulumModel, rule: str, theta0, p0, *, h_st
     >>> branch.folded    # one link: the trapezoid equation is explicit in q1, no fold
     False
     """
-    model = conservative_model(model)
+    model = conservative_model(model, chain=True)
     rule = check.choice("rule", rule, RULES)
     n = model.n
     theta0 = check.state_vector("theta0", theta0, n)

@@ -780,6 +780,18 @@ def require_model(model, name: str = "model") -> PendulumModel:
     return model
 
 
+def require_chain(model, what: str) -> PendulumModel:
+    """``model`` itself if it is a chain of rods; a ``TypeError`` saying why ``what`` needs one.
+
+    ``what`` completes "... because ..." (``"it uses the chain's closed-form period"``).
+    """
+    require_model(model)
+    if not model.is_chain:
+        raise TypeError(f"`model` must be a chain of rods (simple_pendulum, double_pendulum, "
+                        f"n_pendulum, driven_pendulum) here, because {what}; got {model!r}")
+    return model
+
+
 def require_double_pendulum(model) -> PendulumModel:
     """``model`` itself if it is a :class:`PendulumModel` with two links."""
     require_model(model)

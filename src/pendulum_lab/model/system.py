@@ -15,6 +15,8 @@ generator of :mod:`pendulum_lab.codegen.kernels`.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -166,6 +168,25 @@ class SystemModel(PendulumModel):
         return SystemModel, (self.system, dict(zip(map(str, self.system.parameters),
                                                    self._params))), {
             "_period": self._period, "start": self.start, "factory": self.factory}
+
+    @functools.cached_property
+    def equilibria(self) -> tuple:
+        """The equilibria SymPy finds at these parameter values, least potential energy first.
+
+        A coordinate an equilibrium leaves free (the cart's position ``x``) is set to 0, so
+        each point is a number; each name reads ``"r = 1/2, theta = pi"``. An empty tuple if
+        SymPy finds none; a ``ValueError`` if the equations depend on the time.
+        """
+        found = []
+        for equilibrium in self.system.equilibria(self.parameter_values):
+            free = {qi: 0 for qi in self.system.q}
+            point = tuple(float(sp.sympify(c).xreplace(free)) for c in equilibrium.angles)
+            at = self.system.equilibrium_at(point, self.parameter_values)
+            name = ", ".join(f"{qi} = {sp.nsimplify(v, [sp.pi], tolerance=1e-12)}"
+                             for qi, v in zip(self.system.q, point))
+            found.append(dataclasses.replace(at, name=name))
+        return tuple(sorted(found, key=lambda eq: float(self.potential_energy(
+            np.array(eq.angles, dtype=float), 0.0))))
 
     # ---- numeric functions, each with the time ----------------------------------------
     def _described(self) -> tuple[str, str]:

@@ -153,7 +153,8 @@ def superscript(number: int) -> str:
 
 
 def pendulum_name(model: PendulumModel) -> str:
-    """What a legend calls ``model``: "simple pendulum", "damped, driven pendulum", ...
+    """What a legend calls ``model``: "simple pendulum", "damped, driven pendulum", ...; a
+    system that is not a chain by its own name ("the elastic pendulum").
 
     Examples
     --------
@@ -163,6 +164,8 @@ def pendulum_name(model: PendulumModel) -> str:
     >>> pendulum_name(pl.n_pendulum(3, damping=0.1))
     'damped 3-link pendulum'
     """
+    if not model.is_chain:
+        return model.name
     kind = {1: "simple pendulum", 2: "double pendulum"}.get(model.n, f"{model.n}-link pendulum")
     forces = [word for word, present in (("damped", not model.is_conservative),
                                           ("driven", not model.is_autonomous)) if present]

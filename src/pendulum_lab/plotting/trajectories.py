@@ -436,17 +436,14 @@ def plot_linear_vs_nonlinear(
     linear[np.maximum.accumulate(np.any(np.abs(linear) > clip, axis=1))] = np.nan
     offsets = traj.theta - angles
     n = model.n
+    names = ([f"θ{link_label(i, n)}" for i in range(n)] if model.is_chain
+             else model.coordinate_names)
     for ax, data, title in zip(axes, (linear, offsets), ("linearised", "nonlinear")):
         for i in range(n):
-            ax.plot(
-                traj.t,
-                data[:, i],
-                color=f"C{i}",
-                label=f"θ{link_label(i, n)} − θ{link_label(i, n)}*",
-            )
+            ax.plot(traj.t, data[:, i], color=f"C{i}", label=f"{names[i]} − {names[i]}*")
         ax.set(xlabel=axis_label("t"), title=f"{title} near {eq.name}")
         ax.legend(loc="upper left", fontsize="small")
-    axes[0].set_ylabel("offset from equilibrium (rad)")
+    axes[0].set_ylabel("offset from equilibrium" + (" (rad)" if model.is_chain else ""))
     return axes[0].figure
 
 

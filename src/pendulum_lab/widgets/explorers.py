@@ -33,6 +33,7 @@ from .controls import (
     energy_is_conserved,
     forces_text,
     parameter_controls,
+    parameter_key,
     pendulum_controls,
     run_controls,
     slider,
@@ -294,7 +295,8 @@ class EquilibriumExplorer(Instrument):
         offset: np.ndarray,
     ):
         n = model.n
-        names = [eq.name for eq in model.chain.equilibria]
+        names = [eq.name for eq in (model.chain.equilibria if model.is_chain
+                                    else model.equilibria)]
         controls = {
             "equilibrium": widgets.Dropdown(
                 options=names,
@@ -319,33 +321,45 @@ class EquilibriumExplorer(Instrument):
         keys = control_names(n)
         columns = [
             ("Start near", ["equilibrium", *keys["theta"], *keys["omega"]]),
-            ("Parameters", keys["mass"] + keys["length"] + ["g"]),
+            ("Parameters", keys["mass"] + keys["length"] + ["g"] if model.is_chain
+             else [parameter_key(model, str(s)) for s in model.parameter_values]),
             ("Integration", ["method", "dt", "t_end"]),
         ]
         super().__init__(model, controls, columns)
 
+    def _selected(self, model):
+        """The equilibrium of ``model`` the dropdown selects."""
+        dropdown = self.controls["equilibrium"]
+        if model.is_chain:
+            return find_equilibrium(model, dropdown.value)
+        # A system's equilibria move with its parameters (and so do their names): take the
+        # one in the same place of the list, ordered by potential energy.
+        return model.equilibria[dropdown.index]
+
     @property
     def equilibrium(self):
         """The selected :class:`~pendulum_lab.symbolic.mechanics.Equilibrium`."""
-        return self.model.chain.equilibrium(self.controls["equilibrium"].value)
+        return self._selected(self.model)
 
     def prepare(self) -> SimulateCall:
         def origin(model):
-            return equilibrium_angles(model, self.controls["equilibrium"].value)
+            return equilibrium_angles(model, self._selected(model))
 
         return call_from_controls(self.model, self.controls, origin=origin)
 
     def draw(self, figure):
         left = figure.add_subplot(1, 2, 1)
         right = figure.add_subplot(1, 2, 2, sharey=left)
-        plotting.plot_linear_vs_nonlinear(
-            self.model, self.controls["equilibrium"].value, self.trajectory, axes=(left, right)
-        )
+        plotting.plot_linear_vs_nonlinear(self.model, self.equilibrium, self.trajectory,
+                                          axes=(left, right))
         figure.subplots_adjust(left=0.07, right=0.985, bottom=0.16, top=0.9, wspace=0.12)
 
     def summary(self) -> str:
         eq = self.equilibrium
-        kind = eq.classify(self.model.parameter_values)
+        try:
+            kind = eq.classify(self.model.parameter_values)
+        except ValueError:  # an eigenvalue 0: a coordinate left free (the cart's position)
+            kind = "degenerate (a coordinate moves freely)"
         jac = np.array(eq.jacobian.subs(self.model.parameter_values), dtype=float)
         pairs = []
         for z in np.linalg.eigvals(jac):
@@ -376,7 +390,9 @@ def explore_equilibrium(
     equilibrium : str, optional
         A name from ``[eq.name for eq in model.chain.equilibria]`` (``"down"``,
         ``"up"`` for one link; ``"down-down"``, ``"down-up"``, ``"up-down"``,
-        ``"up-up"`` for two); default all down.
+        ``"up-up"`` for two); default all down. For a system that is not a
+        chain, a name from ``[eq.name for eq in model.equilibria]``; default its
+        equilibrium of least potential energy.
     t_end, dt : float
         Duration and step [s].
     method : str
