@@ -123,6 +123,9 @@ def test_chain_only_tools_refuse_systems_with_a_reason(elastic, kapitza, cart):
     for tool in (geometric.modified_equation, geometric.modified_hamiltonian):
         with pytest.raises(ValueError, match="depend on the time"):
             tool(kapitza, "leapfrog", 2)  # Kapitza has n = 1, like the simple pendulum
+    with pytest.raises(ValueError, match="have none yet.*Methods that can: .*glrk4"):
+        pl.simulate(elastic, [1.1, 0.3], [0.0, 0.0], t_end=0.1, dt=0.01,
+                    method="variational_midpoint")
     assert analysis.pendulum_name(cart) == "the pendulum on a cart"
     assert figure_name(elastic) == "the elastic pendulum"
 

@@ -145,8 +145,10 @@ def unsuitability(method: Method, field: HamiltonianField) -> str | None:
         return (f"{method.name} assumes a Hamiltonian vector field, and damping is not "
                 "Hamiltonian (its guesses and its symplecticity rely on dp/dt = -H_q)")
     if method.applies_to == LAGRANGIAN_FIELD and field.discrete is None:
-        return (f"{method.name} steps the discrete Lagrangian of the unforced chain, "
-                "L = T - V, and a drive torque is not part of L")
+        return (f"{method.name} steps a discrete Lagrangian, which this field does not come "
+                "with: one is generated for an unforced chain only (a drive torque is not part "
+                "of L = T - V, and systems given by their points or their Lagrangian have none "
+                "yet)")
     if method.applies_to == CONFORMAL_FIELD and not np.all(np.isfinite(rates)):
         return (f"{method.name} needs damping of the conformal form dp/dt = -H_q - gamma p "
                 "with a constant gamma")
