@@ -56,6 +56,7 @@ __all__ = [
     "double_pendulum",
     "driven_pendulum",
     "n_pendulum",
+    "require_chain",
     "require_double_pendulum",
     "require_model",
     "simple_pendulum",
