@@ -12,21 +12,6 @@ from pendulum_lab.plotting.figures import pendulum_name as figure_name
 from pendulum_lab.widgets import explore_equilibrium
 
 
-@pytest.fixture(scope="module")
-def elastic():
-    return pl.elastic_pendulum()
-
-
-@pytest.fixture(scope="module")
-def kapitza():
-    return pl.kapitza_pendulum()
-
-
-@pytest.fixture(scope="module")
-def cart():
-    return pl.cart_pendulum()
-
-
 def values(model) -> dict:
     return {str(s): v for s, v in model.parameter_values.items()}
 

@@ -10,16 +10,6 @@ import pendulum_lab as pl
 from pendulum_lab.analysis import reversibility_error, symplecticity_defect
 
 
-@pytest.fixture(scope="module")
-def elastic():
-    return pl.elastic_pendulum()
-
-
-@pytest.fixture(scope="module")
-def kapitza():
-    return pl.kapitza_pendulum()
-
-
 def test_elastic_energy_bounded_over_1000_periods_with_glrk4_and_drifts_with_rk4(elastic):
     r_star = 0.75 + 9.81 / elastic.parameter_values[sp.Symbol("k", positive=True)]
     period = 2 * np.pi / np.sqrt(9.81 / r_star)  # the slower (swinging) mode

@@ -11,11 +11,6 @@ from pendulum_lab.widgets.calls import model_code
 from pendulum_lab.widgets.live import released_angles, run_messages
 
 
-@pytest.fixture(scope="module")
-def elastic():
-    return pl.elastic_pendulum()
-
-
 def test_the_sliders_are_the_systems_coordinates_and_parameters(elastic):
     ex = widgets.explore(elastic, t_end=1.0, dt=0.01, method="rk4")
     described = {key: c.description for key, c in ex.controls.items()}

@@ -18,18 +18,11 @@ from .. import validation as check
 from ..codegen import kernels as codegen
 from ..codegen.cache import load_generated
 from ..integrators import HamiltonianField, get_method
-from ..model import PendulumModel, SystemModel, require_model
+from ..model import PendulumModel, require_model
 from .loops import compile_method
 from .simulate import check_method_fits, hamiltonian_field, initial_state
 
 __all__ = ["henon_step"]
-
-
-def _model_kernels(model):
-    """The compiled kernels of the model's own equations: a chain's or a system's."""
-    if isinstance(model, SystemModel):
-        return model.kernels()
-    return codegen.load_kernels(model.n, model.forced)
 
 
 @functools.cache
@@ -181,8 +174,8 @@ def henon_step(model: PendulumModel, theta0, omega0=None, *, link: int, level, m
     q_ext = np.column_stack([theta, np.full(len(theta), t0)])
     p_ext = np.column_stack([p, width])
     # not separable, and any damping is part of the rescaled field (no conformal splitting)
-    kernels = _model_kernels(model)
-    kernel = _henon_kernel(kernels.module, kernels.description, n, link)
+    # The field's kernels are the model's own (a chain's or a system's): their module by name.
+    kernel = _henon_kernel(field.hamilton.__module__, field.name, n, link)
     name = f"Henon's rescaled field of {field.name}"
     rescaled = HamiltonianField(kernel, field.acceleration, field.params, False, 0.0,
                                 stages=codegen.stage_kernel(kernel, name), name=name)

@@ -341,6 +341,11 @@ class PendulumModel:
         """True when ``H = T(p) + V(q)`` (constant mass matrix: the simple pendulum)."""
         return self._fn.separable
 
+    @property
+    def equilibria(self) -> list:
+        """The chain's equilibria, ``model.chain.equilibria`` (all links down first)."""
+        return self.chain.equilibria
+
     # ---- numeric functions -------------------------------------------------
     def _described(self) -> tuple[str, str]:
         """How error messages name the model (its coordinates) and why it needs ``t``."""

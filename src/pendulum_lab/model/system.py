@@ -177,14 +177,16 @@ class SystemModel(PendulumModel):
         each point is a number; each name reads ``"r = 1/2, theta = pi"``. An empty tuple if
         SymPy finds none; a ``ValueError`` if the equations depend on the time.
         """
+        free = {qi: 0 for qi in self.system.q}
         found = []
         for equilibrium in self.system.equilibria(self.parameter_values):
-            free = {qi: 0 for qi in self.system.q}
             point = tuple(float(sp.sympify(c).xreplace(free)) for c in equilibrium.angles)
-            at = self.system.equilibrium_at(point, self.parameter_values)
             name = ", ".join(f"{qi} = {sp.nsimplify(v, [sp.pi], tolerance=1e-12)}"
                              for qi, v in zip(self.system.q, point))
-            found.append(dataclasses.replace(at, name=name))
+            found.append(dataclasses.replace(
+                equilibrium, name=name, angles=point,
+                jacobian=equilibrium.jacobian.xreplace(free),
+                stiffness_ratio=equilibrium.stiffness_ratio.xreplace(free)))
         return tuple(sorted(found, key=lambda eq: float(self.potential_energy(
             np.array(eq.angles, dtype=float), 0.0))))
 

@@ -295,8 +295,7 @@ class EquilibriumExplorer(Instrument):
         offset: np.ndarray,
     ):
         n = model.n
-        names = [eq.name for eq in (model.chain.equilibria if model.is_chain
-                                    else model.equilibria)]
+        names = [eq.name for eq in model.equilibria]
         controls = {
             "equilibrium": widgets.Dropdown(
                 options=names,
