@@ -108,9 +108,8 @@ def test_chain_only_tools_refuse_systems_with_a_reason(elastic, kapitza, cart):
     for tool in (geometric.modified_equation, geometric.modified_hamiltonian):
         with pytest.raises(ValueError, match="depend on the time"):
             tool(kapitza, "leapfrog", 2)  # Kapitza has n = 1, like the simple pendulum
-    with pytest.raises(ValueError, match="have none yet.*Methods that can: .*glrk4"):
-        pl.simulate(elastic, [1.1, 0.3], [0.0, 0.0], t_end=0.1, dt=0.01,
-                    method="variational_midpoint")
+    with pytest.raises(ValueError, match="does not depend on the time.*Methods that can: .*glrk4"):
+        pl.simulate(kapitza, [3.0], [0.0], t_end=0.1, dt=0.01, method="variational_midpoint")
     assert analysis.pendulum_name(cart) == "the pendulum on a cart"
     assert figure_name(elastic) == "the elastic pendulum"
 
@@ -259,5 +258,26 @@ def test_inverted_kapitza_orbit_loses_stability_near_the_averaging_threshold():
     assert [orbit.stable for orbit in orbits] == [True, False]  # negative control below it
     with pytest.raises(ValueError, match="depends on the time"):
         chaos.continue_orbit(kapitza, "w", [100.0, 99.0], [np.pi], [0.0])
-    with pytest.raises(TypeError, match="chain of rods"):
-        chaos.bifurcation_diagram(kapitza, "a", [0.05], theta0=[np.pi], omega0=[0.0])
+    with pytest.raises(ValueError, match="depends on the time"):
+        chaos.bifurcation_diagram(kapitza, "w", [100.0], theta0=[np.pi], omega0=[0.0])
+
+
+def test_kapitza_bifurcation_diagram_over_the_shaking_amplitude(kapitza):
+    """One ensemble of a family in ``a``: above a w = sqrt(2 g l) the stroboscopic samples
+    stay near the inverted position, below it the pendulum falls (the negative control)."""
+    threshold = np.sqrt(2 * 9.81 * 1.0) / 100.0
+    values = [0.8 * threshold, 1.3 * threshold, 1.6 * threshold]
+    diagram = chaos.bifurcation_diagram(kapitza, "a", values, theta0=[np.pi - 0.05],
+                                        omega0=[0.0], n_periods=32, transient_periods=100,
+                                        steps_per_period=100)
+    distance = np.abs(np.abs(diagram.theta[..., 0]) - np.pi).max(axis=(0, 2))  # per a
+    assert distance[1] < 0.1 and distance[2] < 0.1
+    assert distance[0] > 1.0
+    # each member is the model with its own amplitude: the first one run alone agrees
+    alone = chaos.stroboscopic_section(kapitza.replace(a=values[0]), [np.pi - 0.05], [0.0],
+                                       n_periods=32, transient_periods=100,
+                                       steps_per_period=100)
+    assert np.allclose(alone.theta[:, 0], diagram.theta[:, 0, 0, 0], atol=1e-9)
+    with pytest.raises(ValueError, match="no drive period"):
+        chaos.bifurcation_diagram(pl.elastic_pendulum(), "k", [30.0], theta0=[1.0, 0.1],
+                                  omega0=[0.0, 0.0])

@@ -1,6 +1,8 @@
 """Models of any mechanical system under simulate and step: the elastic, Kapitza and cart
 pendulums, each property with a negative control."""
 
+import pickle
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -132,8 +134,7 @@ def test_lengths_are_never_reduced_by_whole_turns(elastic):
 # ---- bad input ------------------------------------------------------------------------------
 def test_methods_that_do_not_apply_are_refused_naming_those_that_do(elastic, kapitza):
     with pytest.raises(ValueError, match="variational_midpoint.*Methods that can: .*glrk4"):
-        pl.simulate(elastic, [1.0, 0.2], [0.0, 0.0], t_end=1.0, dt=0.01,
-                    method="variational_midpoint")
+        pl.simulate(kapitza, [3.0], [0.0], t_end=1.0, dt=0.01, method="variational_midpoint")
     th, m, c = sp.symbols("theta m c", real=True)
     damped = pl.mechanical_system([th], {m: 1.0, c: 0.2}, points=[(sp.sin(th), -sp.cos(th))],
                                   masses=[m], gravity=9.81,
@@ -154,8 +155,8 @@ def test_bad_input_is_refused_naming_the_argument(elastic):
         pl.kapitza_pendulum(amplitude=-1.0)
     with pytest.raises(ValueError, match=r"`parameters\[k\]` must be finite"):
         elastic.replace(k=float("nan"))
-    with pytest.raises(TypeError, match="not supported yet"):
-        elastic.family(g=[9.81, 1.62])
+    with pytest.raises(ValueError, match=r"`values` must be one of \['m', 'k', 'l_0', 'g'\]"):
+        elastic.family(q=[9.81, 1.62])
     x = sp.Symbol("x", real=True)
     with pytest.raises(ValueError, match="`points\\[0\\]` uses c, which is neither"):
         pl.mechanical_system([x], {"m": 1.0}, points=[(x + sp.Symbol("c"), 0)],
@@ -207,3 +208,37 @@ def test_generated_kernels_equal_the_numpy_vector_field(factory):
         out = np.empty(model.n)
         kernels.acceleration(t, q, want_dq, params, out)
         assert np.allclose(out, model.accelerations(q, want_dq, t=t), rtol=1e-12, atol=1e-12)
+
+
+# ---- families of a system -----------------------------------------------------------------
+def test_a_family_runs_each_member_as_the_member_runs_alone(elastic):
+    springs = elastic.family(k=[20.0, 39.24, 60.0])
+    assert springs.shape == (3,) and len(springs) == 3
+    start = np.broadcast_to(elastic.start, (3, 2))
+    together = pl.simulate(springs, start, np.zeros((3, 2)), t_end=2.0, dt=0.01, method="rk4")
+    for i in range(3):
+        alone = pl.simulate(springs.member(i), elastic.start, [0.0, 0.0], t_end=2.0, dt=0.01,
+                            method="rk4")
+        assert np.array_equal(alone.theta, together.theta[:, i])
+        assert np.array_equal(alone.energy, together.energy[:, i])
+    # negative control: the members are different systems
+    assert np.max(np.abs(together.theta[-1, 0] - together.theta[-1, 2])) > 0.1
+    assert pickle.loads(pickle.dumps(springs)).values["k"].tolist() == [20.0, 39.24, 60.0]
+    assert springs.select([0, 2]).member(1).parameter_values == springs.member(2).parameter_values
+
+
+def test_a_family_refuses_what_it_cannot_vary_or_answer(elastic, kapitza):
+    with pytest.raises(ValueError, match="`values` 'w' sets how the Kapitza pendulum depends "
+                                         "on the time.*can vary are \\['a', 'm', 'l', 'g'\\]"):
+        kapitza.family(w=[90.0, 100.0])
+    springs = elastic.family(k=[20.0, 60.0])
+    with pytest.raises(TypeError, match="one set of equilibria per member"):
+        _ = springs.equilibria
+    with pytest.raises(TypeError, match="already a family"):
+        springs.family(m=[1.0, 2.0])
+    with pytest.raises(ValueError, match="must broadcast together"):
+        elastic.family(k=[20.0, 60.0], m=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="name at least one parameter"):
+        elastic.family()
+    # negative control: the shaking amplitude does not set the period, so it can vary
+    assert kapitza.family(a=[0.03, 0.06]).drive_period == kapitza.drive_period

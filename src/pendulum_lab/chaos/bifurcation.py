@@ -31,7 +31,7 @@ from ..driver.cluster import check_client, map_members, portable_method
 from ..driver.segments import default_segment_steps
 from ..driver.simulate import check_run_length
 from ..integrators import get_method
-from ..model import FAMILY_PARAMETERS, require_chain
+from ..model import family_parameter, require_model
 from ..model.angles import wrap_angle
 from ..model.pendulum import PendulumModel
 from ..plot_dispatch import plot_with
@@ -280,8 +280,11 @@ def bifurcation_diagram(
     Parameters
     ----------
     model : PendulumModel
-        A driven model; its other parameters stay fixed.
+        A driven model, or a system whose time dependence has a period (the Kapitza
+        pendulum); its other parameters stay fixed.
     parameter : {"damping", "drive_amplitude", "drive_frequency", "g"}
+        For a system, one of its own parameters except those that set its period
+        (:func:`~pendulum_lab.model.family_parameter`).
     values : array_like, shape (V,)
         The parameter's values, in the order to plot.
     theta0, omega0 : array_like, shape (n,) or (B, n)
@@ -317,10 +320,8 @@ def bifurcation_diagram(
     >>> diagram.periods.tolist()  # period 1, then period 2 past the first doubling
     [[1], [2]]
     """
-    require_chain(model, "the diagram runs a family of models in one ensemble, which only "
-                  "chains have; follow a system's orbits with continue_orbit or "
-                  "locate_bifurcation, which vary its own parameters")
-    parameter = check.choice("parameter", parameter, FAMILY_PARAMETERS)
+    require_model(model)
+    parameter = family_parameter(model, parameter)
     values = check.real_sequence("values", values)
     variable = check.choice("variable", variable, ("omega", "theta"))
     link = check.index_below("link", link, model.n)
@@ -339,7 +340,7 @@ def bifurcation_diagram(
                      f"{transient_periods + n_periods} periods of `steps_per_period` = "
                      f"{steps_per_period} steps",
                      advice="Choose fewer `values` or periods, or fewer `steps_per_period`")
-    if parameter == "drive_frequency":
+    if parameter == "drive_frequency" and model.is_chain:
         family, ratio = _common_period_family(model, values)
     else:
         family, ratio = model.family(**{parameter: values}), np.ones_like(values)

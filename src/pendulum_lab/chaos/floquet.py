@@ -64,13 +64,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import sympy as sp
 from scipy.optimize import brentq
 
 from .. import validation as check
 from ..driver.simulate import canonical_state, simulate
 from ..integrators import get_method
-from ..model import FAMILY_PARAMETERS, require_model
+from ..model import family_parameter, require_model
 from ..model.angles import wrap_angle
 from ..model.pendulum import PendulumModel
 from .common import require_finite
@@ -321,29 +320,6 @@ def _model_at(model: PendulumModel, parameter: str, value: float) -> PendulumMod
     return model.replace(**{parameter: value})
 
 
-def continuation_parameter(model: PendulumModel, parameter) -> str:
-    """``parameter`` if the orbit tools can vary it, else a ``ValueError`` saying which can.
-
-    A chain's are :data:`~pendulum_lab.model.FAMILY_PARAMETERS`. A system's are its own
-    parameters except those its time dependence reads (the shaking frequency ``w`` of the
-    Kapitza pendulum): the model's period was given with it, and would no longer be the
-    period of the equations.
-    """
-    if model.is_chain:
-        return check.choice("parameter", parameter, FAMILY_PARAMETERS)
-    system = model.system
-    clock = set()
-    for term in system.lagrangian.atoms(sp.Function):
-        if system.t in term.free_symbols:
-            clock |= {str(s) for s in term.free_symbols - {system.t}}
-    allowed = [str(s) for s in system.parameters if str(s) not in clock]
-    if parameter in clock:
-        raise ValueError(f"`parameter` {parameter!r} sets how {system.name} depends on the time "
-                         "(its period), so it cannot be varied along an orbit here: build one "
-                         f"model per value instead; the parameters that can vary are {allowed}")
-    return check.choice("parameter", parameter, allowed)
-
-
 def _bracket(bracket) -> tuple[float, float]:
     """``(start, stop)``, two different finite numbers."""
     values = check.real_sequence("bracket", bracket)
@@ -381,7 +357,7 @@ def continue_orbit(
     model : PendulumModel
     parameter : {"damping", "drive_amplitude", "drive_frequency", "g"}
         For a system that is not a chain, one of its own parameters (see
-        :func:`continuation_parameter`).
+        :func:`~pendulum_lab.model.family_parameter`).
     values : array_like, shape (V,)
     theta0, omega0, p0, periods, t0, steps_per_period, method, tolerance, symmetric
         As for :func:`periodic_orbit`.
@@ -392,7 +368,7 @@ def continue_orbit(
         One per value.
     """
     require_model(model)
-    parameter = continuation_parameter(model, parameter)
+    parameter = family_parameter(model, parameter)
     values = check.real_sequence("values", values)
     options = dict(periods=periods, t0=t0, steps_per_period=steps_per_period, method=method,
                    tolerance=tolerance, symmetric=symmetric)
@@ -472,7 +448,7 @@ def locate_bifurcation(
     model : PendulumModel
     parameter : {"damping", "drive_amplitude", "drive_frequency", "g"}
         For a system that is not a chain, one of its own parameters (see
-        :func:`continuation_parameter`).
+        :func:`~pendulum_lab.model.family_parameter`).
     bracket : (float, float)
         ``(start, stop)``: where the orbit is known and where to stop looking.
     theta0, omega0, p0 : array_like, shape (n,)
@@ -505,7 +481,7 @@ def locate_bifurcation(
     ('period doubling', 1.0664, -1.0)
     """
     require_model(model)
-    parameter = continuation_parameter(model, parameter)
+    parameter = family_parameter(model, parameter)
     if multiplier not in (-1, 1):
         raise ValueError(f"`multiplier` must be -1 (period doubling) or +1 (fold or pitchfork), "
                          f"got {multiplier!r}")
@@ -646,7 +622,7 @@ def period_doubling_cascade(
         A driven model.
     parameter : {"damping", "drive_amplitude", "drive_frequency", "g"}
         For a system that is not a chain, one of its own parameters (see
-        :func:`continuation_parameter`).
+        :func:`~pendulum_lab.model.family_parameter`).
     bracket : (float, float)
         ``(start, stop)``: the attractor at ``start`` must be the first
         periodic orbit of the cascade, and the doublings must lie before
@@ -682,7 +658,7 @@ def period_doubling_cascade(
     ([1, 2], [1.0664, 1.0793])
     """
     require_model(model)
-    parameter = continuation_parameter(model, parameter)
+    parameter = family_parameter(model, parameter)
     start, stop = _bracket(bracket)
     doublings = check.integer_at_least("doublings", doublings, 1)
     settle_periods = check.integer_at_least("settle_periods", settle_periods, 1)

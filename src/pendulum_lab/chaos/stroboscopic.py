@@ -47,8 +47,9 @@ def drive_period(model: PendulumModel) -> float:
     require_model(model)
     period = model.drive_period
     if period is None:
-        raise ValueError("`model` has no drive (its `drive_frequency` is None): a stroboscopic "
-                         "section samples once per drive period")
+        raise ValueError("`model` has no drive period (a chain's `drive_frequency` is None, or a "
+                         "system was given no `period`): a stroboscopic section samples once "
+                         "per drive period")
     period = np.asarray(period, dtype=float)
     if np.ptp(period) != 0:
         raise ValueError("the members of `model` have different drive periods; sample them "

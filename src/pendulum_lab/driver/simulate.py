@@ -171,20 +171,25 @@ def _field(n: int, forced: bool, params: tuple, separable: bool,
 def hamiltonian_field(model: PendulumModel) -> HamiltonianField:
     """The model's compiled vector field (Hamiltonian, plus its forces), as integrators see it.
 
-    For a :class:`~pendulum_lab.model.ModelFamily` the parameters come as one
-    row per member (its shape flattened), and so do the damping rates.
+    For a :class:`~pendulum_lab.model.ModelFamily` or a
+    :class:`~pendulum_lab.model.SystemFamily` the parameters come as one row per member (its
+    shape flattened), and so do the damping rates.
     """
     rate = model.conformal_damping_rate
-    if isinstance(model, SystemModel):  # the kernels of its own equations, same generator
+    system = isinstance(model, SystemModel)
+    if system and not model.shape:  # the kernels of its own equations, same generator
         kernels = model.kernels()
+        # A discrete Lagrangian, as for an unforced chain, if L = T - V is all there is.
+        discrete = (functools.partial(codegen.load_discrete_kernels, model.system)
+                    if model.is_conservative and model.is_autonomous else None)
         return HamiltonianField(kernels.hamilton, kernels.acceleration,
                                 np.array(tuple(model.parameter_values.values()), dtype=float),
-                                model.separable, np.nan if rate is None else rate, None,
+                                model.separable, np.nan if rate is None else rate, discrete,
                                 kernels.stages, kernels.description)
     if not model.shape:
         return _field(model.n, model.forced, tuple(model.parameter_values.values()),
                       model.separable, np.nan if rate is None else rate)
-    kernels = codegen.load_kernels(model.n, model.forced)
+    kernels = model.kernels() if system else codegen.load_kernels(model.n, model.forced)
     rows = np.stack(np.broadcast_arrays(*model.parameter_values.values()), axis=-1)
     rates = np.broadcast_to(np.nan if rate is None else rate, model.shape)
     return HamiltonianField(kernels.hamilton, kernels.acceleration,
@@ -681,7 +686,7 @@ def simulate(
         ``VARIATIONAL_METHODS``. On a damped model the methods that assume a
         Hamiltonian (``semi_implicit_euler``, ``leapfrog``, the variational
         ones) raise a ``ValueError``; so do the variational methods on a driven
-        model.
+        model or one whose Lagrangian depends on the time (a shaken pivot).
     save_every : int
         Keep every ``save_every``-th state (memory for long runs and ensembles).
     p0 : array_like, shape like ``theta0``, optional

@@ -54,7 +54,7 @@ run; the tests compare the two step by step, and the notebooks show the referenc
 
 The variational integrators (:data:`VARIATIONAL_METHODS`) are made from a
 discrete Lagrangian instead of the vector field: their step solves the
-discrete Legendre transform with kernels generated per chain
+discrete Legendre transform with kernels generated per chain or system
 (:func:`pendulum_lab.codegen.kernels.load_discrete_kernels`), which it receives in
 place of ``hamilton`` and ``acceleration`` (same Numba types; see
 :func:`~pendulum_lab.integrators.registry.step_kernels`).
@@ -62,8 +62,9 @@ place of ``hamilton`` and ``acceleration`` (same Numba types; see
 Which fields a method accepts (:attr:`~pendulum_lab.integrators.method.Method.applies_to`):
 Runge-Kutta and the velocity methods integrate any field; symplectic Euler and the leapfrog
 assume a Hamiltonian one (a drive is fine: ``H`` then depends on ``t``); the conformal methods
-need damping of the form ``-gamma p`` (constant ``gamma``); the variational methods need the
-discrete Lagrangian of an unforced chain.
+need damping of the form ``-gamma p`` (constant ``gamma``); the variational methods need a
+discrete Lagrangian: an unforced chain's, or a system's whose L = T - V is all of its dynamics and
+does not depend on the time.
 :func:`~pendulum_lab.integrators.registry.unsuitability` says why a method does not fit a field.
 
 References

@@ -43,8 +43,8 @@ class Method:
     applies_to : {"any", "hamiltonian", "conformal", "lagrangian"}
         The fields it integrates: any; Hamiltonian ones (``damping_rate``
         zero); conformal ones (``damping_rate`` finite, zero included);
-        those with a discrete Lagrangian (an unforced chain: no damping, no
-        drive).
+        those with a discrete Lagrangian (no damping, no drive, no time in L:
+        an unforced chain, the elastic or the cart pendulum).
     tableau : ButcherTableau or None
         The Butcher tableau of a Runge-Kutta method.
     rule, solver : str or None

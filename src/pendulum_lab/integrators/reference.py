@@ -131,7 +131,8 @@ class ReferenceField:
         ``impulse(h, q0, q1) = D_2 L_d(q0, q1) + D_1 L_d(q0, q1)``, the change of momentum.
         """
         if self.kernels.discrete is None:
-            raise ValueError("this field has no discrete Lagrangian (damping or a drive)")
+            raise ValueError("this field has no discrete Lagrangian (damping, a drive or a "
+                             "time-dependent L)")
         kernels = self.kernels.discrete(rule)
 
         def call(kernel, h, *arrays):

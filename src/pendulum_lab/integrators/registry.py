@@ -146,9 +146,9 @@ def unsuitability(method: Method, field: HamiltonianField) -> str | None:
                 "Hamiltonian (its guesses and its symplecticity rely on dp/dt = -H_q)")
     if method.applies_to == LAGRANGIAN_FIELD and field.discrete is None:
         return (f"{method.name} steps a discrete Lagrangian, which this field does not come "
-                "with: one is generated for an unforced chain only (a drive torque is not part "
-                "of L = T - V, and systems given by their points or their Lagrangian have none "
-                "yet)")
+                "with: one is generated where L = T - V is all of the dynamics and does not "
+                "depend on the time (a drive, damping or a shaken pivot is not part of the "
+                "generated L_d, whose kernels take no time)")
     if method.applies_to == CONFORMAL_FIELD and not np.all(np.isfinite(rates)):
         return (f"{method.name} needs damping of the conformal form dp/dt = -H_q - gamma p "
                 "with a constant gamma")

@@ -3,7 +3,8 @@
 ``pendulum`` holds :class:`PendulumModel` (one system), :class:`ModelFamily` (many that differ
 in some numbers), the factories and the checks of a model argument; ``numeric`` the functions
 of a chain (lambdified, or looped for long chains) and of any system; ``angles`` the wrapping
-of angles; ``system`` :class:`SystemModel`, the model of any mechanical system, and the
+of angles; ``system`` :class:`SystemModel`, the model of any mechanical system (and
+:class:`SystemFamily`, many of them), and the
 factories of the elastic, the Kapitza and the cart pendulum.
 """
 
@@ -15,6 +16,7 @@ from .pendulum import (
     PendulumModel,
     double_pendulum,
     driven_pendulum,
+    family_parameter,
     n_pendulum,
     require_chain,
     require_double_pendulum,
@@ -22,6 +24,7 @@ from .pendulum import (
     simple_pendulum,
 )
 from .system import (
+    SystemFamily,
     SystemModel,
     cart_pendulum,
     elastic_pendulum,
@@ -34,6 +37,7 @@ __all__ = [
     "FAMILY_PARAMETERS",
     "ModelFamily",
     "PendulumModel",
+    "SystemFamily",
     "SystemModel",
     "cart_pendulum",
     "elastic_pendulum",
@@ -41,6 +45,7 @@ __all__ = [
     "mechanical_system",
     "double_pendulum",
     "driven_pendulum",
+    "family_parameter",
     "n_pendulum",
     "reduce_turns",
     "require_chain",

@@ -56,6 +56,7 @@ __all__ = [
     "double_pendulum",
     "driven_pendulum",
     "n_pendulum",
+    "family_parameter",
     "require_chain",
     "require_double_pendulum",
     "require_model",
@@ -210,6 +211,15 @@ class PendulumModel:
     #: Shape of the parameters: ``()`` for one model; a
     #: :class:`~pendulum_lab.model.ModelFamily` has one model per entry.
     shape: tuple = ()
+    #: Parameters that set the period of the time dependence and so cannot vary along a family
+    #: (a chain has none: its drive period follows ``drive_frequency``).
+    clock_parameters: tuple = ()
+
+    @property
+    def family_parameters(self) -> tuple[str, ...]:
+        """The parameters a family or an orbit's continuation can vary
+        (:data:`FAMILY_PARAMETERS` for a chain)."""
+        return FAMILY_PARAMETERS
 
     def _parameters(self, forced: bool) -> tuple:
         """The numbers of ``Chain.parameters`` (of the forced chain if ``forced``)."""
@@ -528,7 +538,36 @@ class PendulumModel:
 FAMILY_PARAMETERS = ("damping", "drive_amplitude", "drive_frequency", "g")
 
 
-class ModelFamily(PendulumModel):
+class FamilyMembers:
+    """The members of a family (:class:`ModelFamily`, :class:`~pendulum_lab.model.SystemFamily`):
+    counted, picked, selected and broadcast to a run's ensemble. A family has ``base`` (the
+    model varied), ``values`` (``{name: array}``) and ``_mapped(transform)``, the same family
+    with ``transform`` applied to every array."""
+
+    def __len__(self) -> int:
+        return int(np.prod(self.shape))
+
+    def member(self, index) -> PendulumModel:
+        """The member at ``index`` (an index into ``shape``) as a model of its own."""
+        return self.base.replace(**{k: float(a[index]) for k, a in self.values.items()})
+
+    def select(self, index):
+        """The members ``self.values[...][index]`` (NumPy indexing: a mask, a slice)."""
+        return self._mapped(lambda a: a[index])
+
+    def for_ensemble(self, batch_shape: tuple):
+        """The members broadcast to an ensemble of ``batch_shape`` and flattened.
+
+        Raises
+        ------
+        ValueError
+            If the family's shape does not broadcast to ``batch_shape``.
+        """
+        batch_shape = require_ensemble_fit(self.shape, batch_shape)
+        return self._mapped(lambda a: np.broadcast_to(a, batch_shape).reshape(-1))
+
+
+class ModelFamily(FamilyMembers, PendulumModel):
     """Models differing only in the values of some parameters, one per entry of ``shape``.
 
     Build one with :meth:`PendulumModel.family`. Its parameter attributes
@@ -563,13 +602,7 @@ class ModelFamily(PendulumModel):
                 raise ValueError(f"a family cannot vary {name!r}: the parameters it can vary "
                                  f"are {list(FAMILY_PARAMETERS)}")
             arrays[name] = check.real_array(name, value)
-        try:
-            shape = np.broadcast_shapes(*(a.shape for a in arrays.values()))
-        except ValueError:
-            shapes = {k: a.shape for k, a in arrays.items()}
-            raise ValueError(f"the arrays of values must broadcast together, got "
-                             f"{shapes}") from None
-        arrays = {k: np.broadcast_to(a, shape) for k, a in arrays.items()}
+        shape, arrays = broadcast_values(arrays)
         # Each member is a model of its own: the constructor's checks, on whole arrays (a
         # million members are checked at once, not built one by one).
         value = {name: arrays.get(name, getattr(base, name)) for name in FAMILY_PARAMETERS}
@@ -653,37 +686,6 @@ class ModelFamily(PendulumModel):
             return np.broadcast_to(float(self.base.drive_frequency), self.shape)
         return self._params[3 * self.n + 2]
 
-    # ---- members -------------------------------------------------------------
-    def __len__(self) -> int:
-        return int(np.prod(self.shape))
-
-    def member(self, index) -> PendulumModel:
-        """The member at ``index`` (an index into ``shape``) as a model of its own."""
-        return self.base.replace(**{k: float(a[index]) for k, a in self.values.items()})
-
-    def select(self, index) -> ModelFamily:
-        """The members ``self.values[...][index]`` (NumPy indexing: a mask, a slice)."""
-        return self._mapped(lambda a: a[index])
-
-    def for_ensemble(self, batch_shape: tuple) -> ModelFamily:
-        """The members broadcast to an ensemble of ``batch_shape`` and flattened.
-
-        Raises
-        ------
-        ValueError
-            If the family's shape does not broadcast to ``batch_shape``.
-        """
-        batch_shape = tuple(batch_shape)
-        try:
-            fits = np.broadcast_shapes(self.shape, batch_shape) == batch_shape
-        except ValueError:
-            fits = False
-        if not fits:
-            raise ValueError(
-                f"the model family has shape {self.shape}, which must broadcast to the ensemble "
-                f"shape of the initial state, {batch_shape} (`theta0` of shape (..., n))")
-        return self._mapped(lambda a: np.broadcast_to(a, batch_shape).reshape(-1))
-
     def replace(self, **changes) -> ModelFamily:
         """The same family of a base model with some constructor arguments changed."""
         return ModelFamily(self.base.replace(**changes), self.values)
@@ -693,6 +695,32 @@ class ModelFamily(PendulumModel):
 
     def __repr__(self) -> str:
         return f"ModelFamily({self.base!r}, varying {list(self.values)} over shape {self.shape})"
+
+
+def broadcast_values(arrays: dict) -> tuple[tuple, dict]:
+    """The common shape of a family's arrays of values and the arrays broadcast to it; a
+    ``ValueError`` naming their shapes if they do not broadcast together."""
+    try:
+        shape = np.broadcast_shapes(*(a.shape for a in arrays.values()))
+    except ValueError:
+        shapes = {k: a.shape for k, a in arrays.items()}
+        raise ValueError(f"the arrays of values must broadcast together, got {shapes}") from None
+    return shape, {k: np.broadcast_to(a, shape) for k, a in arrays.items()}
+
+
+def require_ensemble_fit(shape: tuple, batch_shape) -> tuple:
+    """``batch_shape`` as a tuple if a family of ``shape`` broadcasts to it, else a
+    ``ValueError`` (the members of a run are its initial states' batch)."""
+    batch_shape = tuple(batch_shape)
+    try:
+        fits = np.broadcast_shapes(shape, batch_shape) == batch_shape
+    except ValueError:
+        fits = False
+    if not fits:
+        raise ValueError(
+            f"the model family has shape {shape}, which must broadcast to the ensemble shape "
+            f"of the initial state, {batch_shape} (`theta0` of shape (..., n))")
+    return batch_shape
 
 
 def simple_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> PendulumModel:
@@ -796,6 +824,21 @@ def require_chain(model, what: str) -> PendulumModel:
         raise TypeError(f"`model` must be a chain of rods (simple_pendulum, double_pendulum, "
                         f"n_pendulum, driven_pendulum) here, because {what}; got {model!r}")
     return model
+
+
+def family_parameter(model, parameter, argument: str = "parameter") -> str:
+    """``parameter`` if families of ``model`` and the orbit tools can vary it; else a
+    ``ValueError`` naming ``argument`` and the parameters that can vary.
+
+    Those are ``model.family_parameters``; a system's ``clock_parameters`` (the Kapitza
+    pendulum's ``w``) are refused with the reason: its period was given with them.
+    """
+    allowed = list(model.family_parameters)
+    if parameter in model.clock_parameters:
+        raise ValueError(f"`{argument}` {parameter!r} sets how {model.name} depends on the time "
+                         "(its period), so it cannot vary along a family or an orbit: build one "
+                         f"model per value instead; the parameters that can vary are {allowed}")
+    return check.choice(argument, parameter, allowed)
 
 
 def require_double_pendulum(model) -> PendulumModel:

@@ -26,9 +26,16 @@ from .. import validation as check
 from ..codegen.kernels import load_system_kernels
 from ..symbolic.systems import MechanicalSystem, parameter_values
 from .numeric import compiled_system
-from .pendulum import Drawing, PendulumModel
+from .pendulum import (
+    Drawing,
+    FamilyMembers,
+    PendulumModel,
+    broadcast_values,
+    family_parameter,
+)
 
 __all__ = [
+    "SystemFamily",
     "SystemModel",
     "cart_pendulum",
     "elastic_pendulum",
@@ -160,9 +167,34 @@ class SystemModel(PendulumModel):
                                                  self._params)) | changes, period=self._period,
                            start=self.start, factory=self.factory)
 
-    def family(self, **values):
-        raise TypeError(f"a family of {self.system.name} is not supported yet: run the models "
-                        "one by one (model.replace(...))")
+    @property
+    def clock_parameters(self) -> tuple[str, ...]:
+        """The parameters the time dependence reads (the Kapitza pendulum's ``w``): the
+        model's period was given with them, so families and orbit continuation keep them."""
+        system, clock = self.system, set()
+        for term in system.lagrangian.atoms(sp.Function):
+            if system.t in term.free_symbols:
+                clock |= {str(s) for s in term.free_symbols - {system.t}}
+        return tuple(str(s) for s in system.parameters if str(s) in clock)
+
+    @property
+    def family_parameters(self) -> tuple[str, ...]:
+        """The parameters a family or an orbit's continuation can vary: all but the
+        :attr:`clock_parameters`."""
+        return tuple(str(s) for s in self.system.parameters
+                     if str(s) not in self.clock_parameters)
+
+    def family(self, **values) -> SystemFamily:
+        """Copies of this system, one per entry of arrays of parameter values (by name).
+
+        Examples
+        --------
+        >>> import pendulum_lab as pl
+        >>> springs = pl.elastic_pendulum().family(k=[20.0, 39.24, 60.0])
+        >>> springs.shape, [round(float(w), 4) for w in springs.member(1).parameter_values.values()]
+        ((3,), [1.0, 39.24, 0.75, 9.81])
+        """
+        return SystemFamily(self, values)
 
     def __reduce__(self):
         return SystemModel, (self.system, dict(zip(map(str, self.system.parameters),
@@ -349,6 +381,70 @@ class SystemModel(PendulumModel):
     def __repr__(self) -> str:
         values = ", ".join(f"{s}={v:g}" for s, v in self.parameter_values.items())
         return f"SystemModel({self.system.name!r}, {values})"
+
+
+class SystemFamily(FamilyMembers, SystemModel):
+    """Copies of a :class:`SystemModel` that differ in some parameter values, one per entry
+    of ``shape``: what :class:`~pendulum_lab.model.ModelFamily` is for a chain.
+
+    The numeric functions broadcast the parameter arrays against the state, whose batch shape
+    must end in one that ``shape`` broadcasts to; :func:`~pendulum_lab.simulate` runs every
+    member in one ensemble, with the kernels of the one system (its parameters are a row of
+    ``params`` per member). The parameters its time dependence reads cannot vary
+    (:attr:`~SystemModel.clock_parameters`: the period was given with them).
+
+    Attributes
+    ----------
+    base : SystemModel
+    values : dict
+        ``{name: ndarray of shape}``, the varied parameters.
+    shape : tuple
+    """
+
+    def __init__(self, base: SystemModel, values: dict):
+        if isinstance(base, SystemFamily):
+            raise TypeError("`model` is already a family; vary its `base` instead")
+        if not values:
+            raise ValueError("name at least one parameter to vary, among "
+                             f"{list(base.family_parameters)}")
+        arrays = {family_parameter(base, name, "values"): check.real_array(name, value)
+                  for name, value in values.items()}
+        shape, self.values = broadcast_values(arrays)
+        self.base = base
+        self.system = self.chain = base.system
+        self.n, self.forced, self._fn = base.n, base.forced, base._fn
+        self._period, self.start, self.factory = base._period, base.start, base.factory
+        defaults = dict(zip(map(str, base.system.parameters), base._params))
+        self._params = tuple(np.array(np.broadcast_to(self.values.get(name, value), shape),
+                                      dtype=float) for name, value in defaults.items())
+
+    @property
+    def shape(self) -> tuple:
+        return self._params[0].shape
+
+    def _mapped(self, transform) -> SystemFamily:
+        return SystemFamily(self.base, {k: transform(a) for k, a in self.values.items()})
+
+    def replace(self, **changes) -> SystemFamily:
+        """The same family of the base system with some of its fixed parameters changed."""
+        return SystemFamily(self.base.replace(**changes), self.values)
+
+    def family(self, **values):
+        raise TypeError("`model` is already a family; vary its `base` instead")
+
+    def _per_member(self, what: str):
+        raise TypeError(f"a family has one {what} per member: ask a member "
+                        "(`family.member(index)`)")
+
+    equilibria = property(lambda self: self._per_member("set of equilibria"))
+    drawing = property(lambda self: self._per_member("drawing"))
+
+    def __reduce__(self):
+        return SystemFamily, (self.base, dict(self.values))
+
+    def __repr__(self) -> str:
+        return (f"SystemFamily({self.system.name!r}, varying {list(self.values)} over shape "
+                f"{self.shape})")
 
 
 def mechanical_system(coordinates, parameters, *, points=None, masses=None, gravity=None,

@@ -2,9 +2,9 @@
 
 ``mechanics`` derives chains of n links (Lagrangian, mass matrix, forcing, Hamiltonian,
 equilibria); ``systems`` any holonomic system from its points or its Lagrangian (a chain is
-one case); ``discrete_mechanics`` the chains' discrete Lagrangians for the variational
-methods; ``errata`` checks the course report's formulas against the derivation, symbol by
-symbol.
+one case); ``discrete_mechanics`` the discrete Lagrangians of chains and conservative,
+autonomous systems for the variational methods; ``errata`` checks the course report's formulas
+against the derivation, symbol by symbol.
 It knows pendulums and nothing of integrators.
 """
 

@@ -1,4 +1,5 @@
-"""Discrete mechanics of a chain of pendulums (SymPy only; uses :mod:`mechanics`).
+"""Discrete mechanics of a chain of pendulums or any conservative, autonomous system (SymPy
+only; uses :mod:`mechanics` and :mod:`systems`).
 
 Variational integrators discretise the *action* instead of the equations of
 motion [MW]. A discrete Lagrangian ``L_d(q_k, q_{k+1}; h)`` approximates the
@@ -41,6 +42,7 @@ import numpy as np
 import sympy as sp
 
 from .mechanics import Chain, derive_chain
+from .systems import MechanicalSystem
 
 __all__ = ["RULES", "DiscreteLagrangian", "discrete_lagrangian", "discrete_momenta",
            "reference_step"]
@@ -48,19 +50,51 @@ __all__ = ["RULES", "DiscreteLagrangian", "discrete_lagrangian", "discrete_momen
 RULES = ("midpoint", "trapezoid")
 
 
-def _configuration(base: str, n: int, label: str) -> sp.Matrix:
-    """Symbols ``theta_{k}`` (one link) or ``theta_{i,k}``, shown with LaTeX subscripts."""
-    names = ([f"{base}_{{{label}}}"] if n == 1
-             else [f"{base}_{{{i},{label}}}" for i in range(1, n + 1)])
+def _configuration(system, base: str, label: str) -> sp.Matrix:
+    """Symbols for the coordinates at step ``label``, shown with LaTeX subscripts.
+
+    A chain's are ``theta_{k}`` (one link) or ``theta_{i,k}``; a system's carry its
+    coordinates' names, ``r_{k}``, ``theta_{k}``. ``base`` names a chain's (``theta``, or
+    ``v`` for the velocities); a system's velocities are ``v_{r,k}``.
+    """
+    n = system.n
+    if isinstance(system, MechanicalSystem):
+        names = ([f"{qi.name}_{{{label}}}" for qi in system.q] if base == "theta"
+                 else [f"{base}_{{{qi.name},{label}}}" for qi in system.q])
+    else:
+        names = ([f"{base}_{{{label}}}"] if n == 1
+                 else [f"{base}_{{{i},{label}}}" for i in range(1, n + 1)])
     return sp.Matrix([sp.Symbol(name, real=True) for name in names])
 
 
+def _require_lagrangian_only(system) -> None:
+    """A ``ValueError`` unless ``L = T - V`` is all of ``system``'s dynamics and has no ``t``.
+
+    The generated kernels take no time and no forces: a drive, damping or a shaken pivot
+    would be left out of the steps without a word.
+    """
+    if getattr(system, "forced", False):
+        raise ValueError(f"{_described(system)} has generalized forces (a drive or damping), "
+                         "which are not part of its Lagrangian: a discrete Lagrangian would "
+                         "leave them out")
+    if isinstance(system, MechanicalSystem) and not system.autonomous:
+        raise ValueError(f"{_described(system)} has a Lagrangian that depends on the time t; "
+                         "the discrete Lagrangians here are of autonomous systems only")
+
+
+def _described(system) -> str:
+    return system.name if isinstance(system, MechanicalSystem) else f"a chain of {system.n} links"
+
+
 class DiscreteLagrangian:
-    """A discrete Lagrangian of a chain and the equations it generates.
+    """A discrete Lagrangian of a chain or a system and the equations it generates.
 
     Parameters
     ----------
-    chain : pendulum_lab.symbolic.mechanics.Chain
+    chain : Chain or MechanicalSystem
+        Unforced, with a Lagrangian that does not depend on the time (a ``ValueError``
+        otherwise). Only ``n``, ``q``, ``omega``, ``lagrangian``, ``parameters`` and
+        ``mass_matrix`` are read.
     rule : {"midpoint", "trapezoid"}
 
     Attributes
@@ -105,14 +139,15 @@ class DiscreteLagrangian:
     g*h*l*m*sin(theta_{k})/2 + l**2*m*theta_{k+1}/h - l**2*m*theta_{k}/h
     """
 
-    def __init__(self, chain: Chain, rule: str):
+    def __init__(self, chain: Chain | MechanicalSystem, rule: str):
         if rule not in RULES:
             raise ValueError(f"`rule` must be one of {list(RULES)}, got {rule!r}")
+        _require_lagrangian_only(chain)
         self.chain, self.rule, self.n = chain, rule, chain.n
         self.h = sp.Symbol("h", positive=True)
-        self.q_prev = _configuration("theta", self.n, "k-1")
-        self.q = _configuration("theta", self.n, "k")
-        self.q_next = _configuration("theta", self.n, "k+1")
+        self.q_prev = _configuration(chain, "theta", "k-1")
+        self.q = _configuration(chain, "theta", "k")
+        self.q_next = _configuration(chain, "theta", "k+1")
         self.expression = self(self.q, self.q_next)
         self.momentum_minus = sp.expand(-self._gradient(self.expression, self.q))
         self.momentum_plus = sp.expand(self._gradient(self.expression, self.q_next))
@@ -127,9 +162,7 @@ class DiscreteLagrangian:
         ``D_2 L_d = A_b + A_v / h``, and ``A_v / h = mean_mass v`` because ``L``
         is quadratic in the velocity.
         """
-        names = (["v_{k}"] if self.n == 1
-                 else [f"v_{{{i},k}}" for i in range(1, self.n + 1)])
-        self.v = sp.Matrix([sp.Symbol(name, real=True) for name in names])
+        self.v = _configuration(self.chain, "v", "k")
         action = self._action(self.q, self.q_next, self.v)
         velocity_momentum = self._gradient(action, self.v) / self.h
         self.mean_mass = sp.expand(velocity_momentum.jacobian(self.v))
@@ -168,34 +201,52 @@ class DiscreteLagrangian:
         return self.h / 2 * (self.lagrangian_at(a, velocity) + self.lagrangian_at(b, velocity))
 
     def __repr__(self) -> str:
+        if isinstance(self.chain, MechanicalSystem):
+            return f"DiscreteLagrangian({self.chain.name!r}, rule={self.rule!r})"
         return f"DiscreteLagrangian(n={self.n}, rule={self.rule!r})"
 
 
 @functools.cache
-def _discrete(n: int, rule: str) -> DiscreteLagrangian:
-    return DiscreteLagrangian(derive_chain(n), rule)
+def _discrete(n_or_system, rule: str) -> DiscreteLagrangian:
+    system = n_or_system if isinstance(n_or_system, MechanicalSystem) else derive_chain(n_or_system)
+    return DiscreteLagrangian(system, rule)
 
 
-def discrete_lagrangian(n: int, rule: str) -> DiscreteLagrangian:
-    """The discrete Lagrangian of a chain of ``n`` links by ``rule`` (derived once, cached).
+def discrete_lagrangian(n, rule: str) -> DiscreteLagrangian:
+    """The discrete Lagrangian of a chain of ``n`` links, or of a system, by ``rule``
+    (derived once, cached).
 
     Parameters
     ----------
-    n : int
-        Number of links, ``>= 1``.
+    n : int or MechanicalSystem
+        Number of links, ``>= 1``; or a conservative system whose Lagrangian does not depend
+        on the time (the elastic pendulum's, the cart pendulum's).
     rule : {"midpoint", "trapezoid"}
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> r, th, m, k, g = sp.symbols("r theta m k g", positive=True)
+    >>> spring = MechanicalSystem([r, th], {m: 1.0, k: 40.0, g: 9.81}, masses=[m],
+    ...                           points=[(r * sp.sin(th), -r * sp.cos(th))], gravity=g,
+    ...                           potential=k * (r - 1) ** 2 / 2)
+    >>> list(discrete_lagrangian(spring, "midpoint").q_next)
+    [r_{k+1}, theta_{k+1}]
     """
-    if isinstance(n, bool) or not isinstance(n, int):
-        raise TypeError(f"`n` must be an integer >= 1, got {n!r}")
-    if n < 1:
-        raise ValueError(f"`n` must be an integer >= 1, got {n}")
     if rule not in RULES:
         raise ValueError(f"`rule` must be one of {list(RULES)}, got {rule!r}")
+    if isinstance(n, MechanicalSystem):
+        _require_lagrangian_only(n)
+        return _discrete(n, rule)
+    if isinstance(n, bool) or not isinstance(n, int):
+        raise TypeError(f"`n` must be an integer >= 1 or a MechanicalSystem, got {n!r}")
+    if n < 1:
+        raise ValueError(f"`n` must be an integer >= 1, got {n}")
     return _discrete(n, rule)
 
 
 @functools.cache
-def _step_functions(n: int, rule: str):
+def _step_functions(n, rule: str):
     dl = _discrete(n, rule)
     args = (*dl.q, *dl.q_next, dl.h, *dl.chain.parameters)
     minus = sp.lambdify(args, list(dl.momentum_minus), cse=True, dummify=True)
@@ -204,7 +255,7 @@ def _step_functions(n: int, rule: str):
     return minus, jac, plus
 
 
-def reference_step(n: int, rule: str, parameters: dict, q0, p0, h: float,
+def reference_step(n, rule: str, parameters: dict, q0, p0, h: float,
                    tol: float = 1e-14, max_iterations: int = 50):
     """One step of the variational integrator of ``rule``, solved by Newton's method.
 
@@ -214,11 +265,12 @@ def reference_step(n: int, rule: str, parameters: dict, q0, p0, h: float,
 
     Parameters
     ----------
-    n : int
+    n : int or MechanicalSystem
+        As for :func:`discrete_lagrangian`.
     rule : {"midpoint", "trapezoid"}
     parameters : dict
-        ``{symbol: value}`` for the masses, lengths and ``g`` (a model's
-        ``parameter_values``).
+        ``{symbol: value}`` for the masses, lengths and ``g``, or a system's parameters (a
+        model's ``parameter_values``).
     q0, p0 : array_like, shape (n,)
     h : float
         Step; negative steps backwards.
@@ -236,6 +288,7 @@ def reference_step(n: int, rule: str, parameters: dict, q0, p0, h: float,
     minus, jac, plus = _step_functions(n, rule)
     values = _parameter_values(dl, parameters)
     q0, p0 = np.asarray(q0, float), np.asarray(p0, float)
+    n = dl.n
     if q0.shape != (n,) or p0.shape != (n,):
         raise ValueError(f"`q0` and `p0` must have shape ({n},), got {q0.shape} and {p0.shape}")
     if not (np.isfinite(h) and h != 0):
@@ -263,12 +316,13 @@ def _parameter_values(dl: DiscreteLagrangian, parameters) -> list[float]:
         raise ValueError(f"`parameters` lacks a value for {missing}") from None
 
 
-def discrete_momenta(n: int, rule: str, parameters: dict, q0, q1, h: float):
+def discrete_momenta(n, rule: str, parameters: dict, q0, q1, h: float):
     """The discrete Legendre transforms of steps ``q0 -> q1``: the momenta at both ends.
 
     Parameters
     ----------
-    n : int
+    n : int or MechanicalSystem
+        As for :func:`discrete_lagrangian`.
     rule : {"midpoint", "trapezoid"}
     parameters : dict
         A model's ``parameter_values``.
@@ -296,6 +350,7 @@ def discrete_momenta(n: int, rule: str, parameters: dict, q0, q1, h: float):
     minus, _, plus = _step_functions(n, rule)
     values = _parameter_values(dl, parameters)
     q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    n = dl.n
     if q0.shape != q1.shape or q0.ndim == 0 or q0.shape[-1] != n:
         raise ValueError(f"`q0` and `q1` must have the same shape (..., {n}), got {q0.shape} "
                          f"and {q1.shape}")
