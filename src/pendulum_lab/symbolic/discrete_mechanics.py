@@ -160,7 +160,9 @@ class DiscreteLagrangian:
 
         With ``L_d(a, b) = A(a, b, (b - a)/h)``: ``D_1 L_d = A_a - A_v / h`` and
         ``D_2 L_d = A_b + A_v / h``, and ``A_v / h = mean_mass v`` because ``L``
-        is quadratic in the velocity.
+        is quadratic in the velocity (plus the rule's mean of ``b`` where ``L`` has terms
+        linear in it, ``b(q)^T omega``; the transforms keep them, as they keep everything
+        ``A_v`` holds).
         """
         self.v = _configuration(self.chain, "v", "k")
         action = self._action(self.q, self.q_next, self.v)
