@@ -171,18 +171,14 @@ class SystemModel(PendulumModel):
     def clock_parameters(self) -> tuple[str, ...]:
         """The parameters the time dependence reads (the Kapitza pendulum's ``w``): the
         model's period was given with them, so families and orbit continuation keep them."""
-        system, clock = self.system, set()
-        for term in system.lagrangian.atoms(sp.Function):
-            if system.t in term.free_symbols:
-                clock |= {str(s) for s in term.free_symbols - {system.t}}
-        return tuple(str(s) for s in system.parameters if str(s) in clock)
+        return self.system.clock_parameters
 
     @property
     def family_parameters(self) -> tuple[str, ...]:
         """The parameters a family or an orbit's continuation can vary: all but the
         :attr:`clock_parameters`."""
-        return tuple(str(s) for s in self.system.parameters
-                     if str(s) not in self.clock_parameters)
+        clock = self.clock_parameters
+        return tuple(name for name in map(str, self.system.parameters) if name not in clock)
 
     def family(self, **values) -> SystemFamily:
         """Copies of this system, one per entry of arrays of parameter values (by name).

@@ -238,8 +238,7 @@ def discrete_lagrangian(n, rule: str) -> DiscreteLagrangian:
     if rule not in RULES:
         raise ValueError(f"`rule` must be one of {list(RULES)}, got {rule!r}")
     if isinstance(n, MechanicalSystem):
-        _require_lagrangian_only(n)
-        return _discrete(n, rule)
+        return _discrete(n, rule)  # DiscreteLagrangian refuses forces or a time-dependent L
     if isinstance(n, bool) or not isinstance(n, int):
         raise TypeError(f"`n` must be an integer >= 1 or a MechanicalSystem, got {n!r}")
     if n < 1:

@@ -370,6 +370,16 @@ class MechanicalSystem:
         exprs = [self.lagrangian, *self.generalized_forces]
         return all(self.t not in e.free_symbols for e in exprs)
 
+    @functools.cached_property
+    def clock_parameters(self) -> tuple[str, ...]:
+        """Names of the parameters that the Lagrangian's time dependence reads: those inside
+        a function of ``t`` (the Kapitza pendulum's ``w`` in ``cos(w t)``)."""
+        clock = set()
+        for term in self.lagrangian.atoms(sp.Function):
+            if self.t in term.free_symbols:
+                clock |= {str(s) for s in term.free_symbols - {self.t}}
+        return tuple(str(s) for s in self.parameters if str(s) in clock)
+
     @property
     def separable(self) -> bool:
         """``H = T(p) + V(q)``: ``M`` constant, ``b = 0``, no time in the kinetic energy."""
