@@ -116,6 +116,7 @@ class Config:
     # item 15: systems given by their points; runs of 50 ms, since a few ms are noise-dominated
     systems_steps: int = 400_000
     systems_rounds: int = 7
+    systems_processes: int = 5  # fresh processes; the median of their ratios
     systems_first_use: bool = True  # fresh processes with empty kernel caches
 
 
@@ -152,6 +153,7 @@ QUICK = replace(
     per_eval_before=False,
     systems_steps=20000,
     systems_rounds=1,
+    systems_processes=1,
     floor_t_end=100.0,
     peer_t_end=100.0,
     peer_long_t_end=300.0,
@@ -208,6 +210,7 @@ SMOKE = replace(
     per_eval_before=False,
     systems_steps=500,
     systems_rounds=1,
+    systems_processes=1,
     systems_first_use=False,
     floor_dt=0.01,
     floor_t_end=1.0,

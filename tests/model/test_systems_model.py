@@ -242,3 +242,19 @@ def test_a_family_refuses_what_it_cannot_vary_or_answer(elastic, kapitza):
         elastic.family()
     # negative control: the shaking amplitude does not set the period, so it can vary
     assert kapitza.family(a=[0.03, 0.06]).drive_period == kapitza.drive_period
+
+
+def test_a_drive_given_as_a_force_sets_the_clock_a_family_cannot_vary():
+    th = sp.Symbol("theta", real=True)
+    m, length, g, f, drive = sp.symbols("m l g f Omega", positive=True)
+    t = sp.Symbol("t", real=True)
+    driven = pl.mechanical_system([th], {m: 1.0, length: 1.0, g: 9.81, f: 0.5, drive: 2.0},
+                                  points=[(length * sp.sin(th), -length * sp.cos(th))],
+                                  masses=[m],
+                                  gravity=g, forces=[f * sp.cos(drive * t)],
+                                  period=2 * np.pi / 2.0, name="a driven pendulum")
+    with pytest.raises(ValueError, match="'Omega' sets how a driven pendulum depends on the "
+                                         "time"):
+        driven.family(Omega=[1.5, 2.5])
+    # negative control: the drive's strength does not set the period, so it can vary
+    assert len(driven.family(f=[0.2, 0.8])) == 2

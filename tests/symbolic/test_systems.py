@@ -167,6 +167,20 @@ def test_rayleigh_dissipation_and_forces_enter_forcing():
     assert sp.expand(damped.forcing[0] - (-g * l * m * sp.sin(th) - c * w + f * sp.cos(t))) == 0
 
 
+
+def test_clock_parameters_read_the_forces_as_well_as_the_lagrangian():
+    f, drive = sp.symbols("f Omega", positive=True)
+    pendulum = {"points": [(l * sp.sin(th), -l * sp.cos(th))], "masses": [m], "gravity": g}
+    values = {m: 1.0, l: 1.0, g: 9.81, f: 1.0, drive: 2.0}
+    driven = MechanicalSystem([th], values, forces=[f * sp.cos(drive * t)], **pendulum)
+    assert driven.clock_parameters == ("Omega",)
+    assert not driven.autonomous
+    # negative controls: a force without the time sets no clock, nor does a bare cos(t)
+    steady = MechanicalSystem([th], values, forces=[f * sp.sin(th)], **pendulum)
+    assert steady.clock_parameters == () and steady.autonomous
+    bare = MechanicalSystem([th], values, forces=[f * sp.cos(t)], **pendulum)
+    assert bare.clock_parameters == () and not bare.autonomous
+
 # ---- refusals -------------------------------------------------------------------------------
 def test_refuses_lagrangian_not_quadratic_in_velocities():
     rd, td = sp.symbols("r_dot theta_dot", real=True)

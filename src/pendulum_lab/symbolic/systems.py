@@ -365,17 +365,23 @@ class MechanicalSystem:
         return (self.dlagrangian_dq - rate + self.generalized_forces).applyfunc(sp.expand)
 
     @property
+    def _dynamics(self) -> list[sp.Expr]:
+        """The expressions the motion follows from: ``L`` and the generalized forces ``Q``
+        (damping included)."""
+        return [self.lagrangian, *self.generalized_forces]
+
+    @property
     def autonomous(self) -> bool:
         """Nothing depends on the time ``t``."""
-        exprs = [self.lagrangian, *self.generalized_forces]
-        return all(self.t not in e.free_symbols for e in exprs)
+        return all(self.t not in e.free_symbols for e in self._dynamics)
 
     @functools.cached_property
     def clock_parameters(self) -> tuple[str, ...]:
-        """Names of the parameters that the Lagrangian's time dependence reads: those inside
-        a function of ``t`` (the Kapitza pendulum's ``w`` in ``cos(w t)``)."""
+        """Names of the parameters that the time dependence reads: those inside a function of
+        ``t`` in the Lagrangian or in a generalized force (the Kapitza pendulum's ``w`` in
+        ``cos(w t)``, a drive's frequency)."""
         clock = set()
-        for term in self.lagrangian.atoms(sp.Function):
+        for term in (f for e in self._dynamics for f in e.atoms(sp.Function)):
             if self.t in term.free_symbols:
                 clock |= {str(s) for s in term.free_symbols - {self.t}}
         return tuple(str(s) for s in self.parameters if str(s) in clock)
