@@ -250,8 +250,7 @@ def test_a_drive_given_as_a_force_sets_the_clock_a_family_cannot_vary():
     t = sp.Symbol("t", real=True)
     driven = pl.mechanical_system([th], {m: 1.0, length: 1.0, g: 9.81, f: 0.5, drive: 2.0},
                                   points=[(length * sp.sin(th), -length * sp.cos(th))],
-                                  masses=[m],
-                                  gravity=g, forces=[f * sp.cos(drive * t)],
+                                  masses=[m], gravity=g, forces=[f * sp.cos(drive * t)],
                                   period=2 * np.pi / 2.0, name="a driven pendulum")
     with pytest.raises(ValueError, match="'Omega' sets how a driven pendulum depends on the "
                                          "time"):

@@ -167,7 +167,6 @@ def test_rayleigh_dissipation_and_forces_enter_forcing():
     assert sp.expand(damped.forcing[0] - (-g * l * m * sp.sin(th) - c * w + f * sp.cos(t))) == 0
 
 
-
 def test_clock_parameters_read_the_forces_as_well_as_the_lagrangian():
     f, drive = sp.symbols("f Omega", positive=True)
     pendulum = {"points": [(l * sp.sin(th), -l * sp.cos(th))], "masses": [m], "gravity": g}
@@ -180,6 +179,7 @@ def test_clock_parameters_read_the_forces_as_well_as_the_lagrangian():
     assert steady.clock_parameters == () and steady.autonomous
     bare = MechanicalSystem([th], values, forces=[f * sp.cos(t)], **pendulum)
     assert bare.clock_parameters == () and not bare.autonomous
+
 
 # ---- refusals -------------------------------------------------------------------------------
 def test_refuses_lagrangian_not_quadratic_in_velocities():
