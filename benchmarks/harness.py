@@ -11,11 +11,13 @@ lines and the raw numbers.
 from __future__ import annotations
 
 import datetime
+import json
 import math
 import os
 import platform
 import statistics
 import subprocess
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -337,6 +339,17 @@ def timed(fn, *args, **kwargs):
     result = fn(*args, **kwargs)
     return Sample(time.perf_counter() - start, time.process_time() - cpu), result
 
+
+
+def child_json(args: list[str], what: str, *, env: dict | None = None,
+               timeout: float = 900) -> dict:
+    """The JSON object that ``python *args`` prints on its last line; a RuntimeError naming
+    ``what``, with the end of the child's stderr, if it fails."""
+    done = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
+                          timeout=timeout, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{what} failed: {done.stderr.strip()[-500:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 # --------------------------------------------------------------------------- helpers
 def double_pendulum():

@@ -15,13 +15,23 @@ import json
 import math
 import os
 import subprocess
-import sys
 import tarfile
 import tempfile
 from pathlib import Path
 
 import c_yardstick
-from harness import HERE, THETA0, Config, Row, Sample, Section, explorer_start, median, verdict
+from harness import (
+    HERE,
+    THETA0,
+    Config,
+    Row,
+    Sample,
+    Section,
+    child_json,
+    explorer_start,
+    median,
+    verdict,
+)
 
 import pendulum_lab as pl
 
@@ -53,11 +63,8 @@ def _probe(settings: dict, src: Path | None, cache: Path | None) -> dict:
         env["PYTHONPATH"] = str(src)
     if cache is not None:
         env["PENDULUM_LAB_CACHE"] = str(cache)
-    done = subprocess.run([sys.executable, str(HERE / "per_eval_probe.py"), json.dumps(settings)],
-                          capture_output=True, text=True, env=env, check=False, timeout=1800)
-    if done.returncode != 0:
-        raise RuntimeError(f"per-evaluation probe failed: {done.stderr.strip()[-500:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return child_json([str(HERE / "per_eval_probe.py"), json.dumps(settings)],
+                      "per-evaluation probe", env=env, timeout=1800)
 
 
 def bench_per_eval(cfg: Config, cloop: c_yardstick.CLoop | None) -> Section:

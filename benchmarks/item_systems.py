@@ -21,14 +21,11 @@ The target: a system's evaluation within 1.5x of the chain's of the same size.
 
 from __future__ import annotations
 
-import json
 import os
-import subprocess
-import sys
 import tempfile
 from statistics import median
 
-from harness import Config, Row, Section, fmt_time, interleave, med, timed
+from harness import Config, Row, Section, child_json, fmt_time, interleave, med, timed
 
 import pendulum_lab as pl
 
@@ -66,23 +63,15 @@ def _in_fresh_process(name: str, steps: int, rounds: int) -> dict:
     """:func:`per_evaluation_pair` in a new Python process (sharing the kernel cache)."""
     code = _PER_EVALUATION.format(here=os.path.dirname(os.path.abspath(__file__)), name=name,
                                   steps=steps, rounds=rounds)
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=900, check=False)
-    if done.returncode != 0:
-        raise RuntimeError(f"timing {name} failed: {done.stderr.strip()[-400:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return child_json(["-c", code], f"timing {name}")
 
 
 def _first_use(factory: str, theta0: list) -> dict:
     """Seconds of a first use in a fresh process with an empty kernel cache."""
     with tempfile.TemporaryDirectory(prefix="pendulum_systems_") as cache:
         env = dict(os.environ, PENDULUM_LAB_CACHE=cache)
-        done = subprocess.run([sys.executable, "-c", _FIRST_USE.format(factory=factory,
-                                                                       theta0=theta0)],
-                              capture_output=True, text=True, env=env, timeout=900, check=False)
-    if done.returncode != 0:
-        raise RuntimeError(f"first use of {factory} failed: {done.stderr.strip()[-400:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+        return child_json(["-c", _FIRST_USE.format(factory=factory, theta0=theta0)],
+                          f"first use of {factory}", env=env)
 
 
 def _runs(model, theta0, steps: int, dt: float) -> dict:
@@ -131,8 +120,7 @@ def bench_systems(cfg: Config) -> Section:
         ratios = sorted(pair["system"] / pair["chain"] for pair in pairs)
         ours, theirs = (median(pair[k] for pair in pairs) for k in ("system", "chain"))
         ratio = median(ratios)
-        coordinates = getattr(pl, factory)().n
-        rows.append(Row("15", f"{name} ({coordinates} coordinates), RK4: cost per evaluation",
+        rows.append(Row("15", f"{name} ({len(theta0)} coordinates), RK4: cost per evaluation",
                         f"{ours * 1e9:.0f} ns", f"{chain} {theirs * 1e9:.0f} ns",
                         f"{ratio:.2f}", f"<= {TARGET}", _verdict(ratio)))
         details.append(f"{name}: the ratio in each of {len(ratios)} process(es): "
