@@ -14,7 +14,8 @@ A submission is graded in a fresh kernel by ``otter run``. Around it this tool m
 bad submission is graded, not crashed on: a file that is not a notebook, or is empty, scores zero
 with the reason; every cell gets a time limit (``--cell-seconds``: a cell that runs longer raises
 ``TimeoutError`` and what it should have answered scores zero) and the whole grading a wall-clock
-limit (``--total-seconds``: past it the grading is stopped and the submission scores zero); a
+limit (``--total-seconds``: past it the grading is stopped and the submission scores zero, and
+the notes end with the grader's log and the stack of each thread of the kernel where it was); a
 cell that raises, or graded cells that were deleted, cost only their questions, and the notes say
 so. Every submission gets ``<stem>.json`` (Gradescope's results format, the notes added) and the
 run a ``grades.csv`` (one row per submission, one column per question) for a gradebook such as
@@ -61,7 +62,10 @@ TOTAL_SECONDS = 900.0
 TIME_LIMIT_CELL = """\
 # Added by the grader: no later cell may run longer than {seconds:g} s.
 def _grader_time_limit(seconds):
+    import faulthandler
+    import os
     import signal
+    import sys
 
     from IPython import get_ipython
 
@@ -69,6 +73,11 @@ def _grader_time_limit(seconds):
         raise TimeoutError(f"stopped by the grader: this cell ran longer than {{seconds:g}} s")
 
     signal.signal(signal.SIGALRM, stop)
+    # Where the kernel is stuck when the whole grading is stopped: the grader sends SIGUSR1
+    # first, and every thread's stack goes to the log (also from inside compiled code).
+    faulthandler.register(signal.SIGUSR1, file=sys.__stderr__, all_threads=True)
+    with open({pid_file!r}, "w") as handle:
+        handle.write(str(os.getpid()))
     events = get_ipython().events
     events.register("pre_run_cell",
                     lambda info: signal.setitimer(signal.ITIMER_REAL, seconds, seconds))
@@ -78,6 +87,8 @@ def _grader_time_limit(seconds):
 _grader_time_limit({seconds!r})
 del _grader_time_limit
 """
+#: Lines of the grader's log kept in the notes of a grading stopped by the total limit.
+LOG_LINES = 60
 TIME_LIMIT_MARK = "# Added by the grader: no later cell may run longer than"
 
 _CHECK_CALL = re.compile(r"""\.check\(\s*["']([^"']+)["']\s*\)""")
@@ -233,13 +244,24 @@ def _cell_problems(executed) -> list[str]:
     return notes
 
 
-def _stop(process: subprocess.Popen) -> None:
-    """End the grading process and the kernel it started (one process group)."""
+def _stop(process: subprocess.Popen, kernel_pid: Path) -> str:
+    """End the grading process and the kernel it started (one process group), after asking the
+    kernel for its threads' stacks; the log of the grading, with those stacks at its end."""
+    try:
+        os.kill(int(kernel_pid.read_text()), signal.SIGUSR1)
+        time.sleep(1.0)  # faulthandler writes from the signal handler, at once
+    except (OSError, ValueError):  # no kernel yet, or it has ended
+        pass
     try:
         os.killpg(process.pid, signal.SIGKILL)
     except ProcessLookupError:
         pass
-    process.wait()
+    log, _ = process.communicate()
+    return log or ""
+
+
+def _tail(log: str, lines: int) -> str:
+    return "\n".join(log.strip().splitlines()[-lines:])
 
 
 def grade(folder: Path, submission: Path, *, cell_seconds: float = CELL_SECONDS,
@@ -276,10 +298,11 @@ def grade(folder: Path, submission: Path, *, cell_seconds: float = CELL_SECONDS,
         notes.append("the notebook has no code cells")
     notes += [f"the check cell of {name} is missing (were the graded cells deleted?)"
               for name in missing_checks(notebook, possible)]
-    notebook.cells.insert(0, nbformat.v4.new_code_cell(
-        TIME_LIMIT_CELL.format(seconds=float(cell_seconds))))
     with tempfile.TemporaryDirectory(prefix="grade-") as work:
         work = Path(work)
+        kernel_pid = work / "kernel.pid"
+        notebook.cells.insert(0, nbformat.v4.new_code_cell(
+            TIME_LIMIT_CELL.format(seconds=float(cell_seconds), pid_file=str(kernel_pid))))
         # Under the name it was handed out with: its first cell opens the notebook by name.
         copy = work / f"{folder.name}.ipynb"
         nbformat.write(notebook, copy)
@@ -291,13 +314,16 @@ def grade(folder: Path, submission: Path, *, cell_seconds: float = CELL_SECONDS,
         try:
             log, _ = process.communicate(timeout=total_seconds)
         except subprocess.TimeoutExpired:
-            _stop(process)
+            log = _stop(process, kernel_pid)
             reason = (f"not graded: the grading was stopped after {total_seconds:g} s "
                       "(a cell that never ends and outlasts the per-cell limit?)")
-            return _zero(submission, possible, reason, time.perf_counter() - started)
+            stopped = _zero(submission, possible, reason, time.perf_counter() - started)
+            stopped.notes.append("the end of the grader's log, with the kernel's stacks:\n"
+                                 + _tail(log, LOG_LINES))
+            return stopped
         results_file = work / "results.json"
         if not results_file.exists():
-            tail = "\n".join(log.strip().splitlines()[-5:])
+            tail = _tail(log, 5)
             reason = f"not graded: the autograder stopped with an error:\n{tail}"
             return _zero(submission, possible, reason, time.perf_counter() - started)
         results = json.loads(results_file.read_text())

@@ -58,6 +58,9 @@ class Kit:
             path = Path(notebook)
         result = tool.grade(self.folders[name], path, **limits)
         self.seconds[f"{name} {label}"] = round(result.seconds, 1)
+        # Shown by pytest when the test fails: why a question lost its points, where it hung.
+        print(f"graded {name} ({label}) in {result.seconds:.0f} s; notes:", *result.notes,
+              sep="\n")
         return result
 
     def solutions(self, name: str):

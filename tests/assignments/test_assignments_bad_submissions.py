@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -106,6 +107,11 @@ def test_a_cell_that_outlasts_its_time_limit_is_stopped_by_the_total_limit(kit):
     assert graded.score == 0
     assert any("stopped after 25 s" in note for note in graded.notes)
     assert graded.seconds < 60
+    # The notes say where the kernel was: its stacks (faulthandler's), the stubborn loop's frame
+    # among them (line 4 of the cell, the inner `pass`).
+    stacks = next(note for note in graded.notes if note.startswith("the end of the grader's log"))
+    assert "(most recent call first)" in stacks
+    assert re.search(r"line [34] in <module>", stacks), stacks
 
 
 def _offline(tmp_path, args):
