@@ -25,6 +25,7 @@ Canvas.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import json
 import os
@@ -193,12 +194,15 @@ class Grade:
         return sum(self.possible.values())
 
 
-def _zero(submission: Path, possible: dict[str, float], reason: str, seconds: float) -> Grade:
-    """A zero on every question, each test saying why."""
+def _zero(submission: Path, possible: dict[str, float], reason: str, seconds: float,
+          details: tuple[str, ...] = ()) -> Grade:
+    """A zero on every question, each test saying why; ``details`` (for the instructor) follow
+    the reason in the notes."""
     tests = [{"name": name, "score": 0.0, "max_score": points, "output": reason}
              for name, points in possible.items()]
-    results = {"score": 0.0, "tests": tests, "notes": [reason]}
-    return Grade(submission, dict.fromkeys(possible, 0.0), dict(possible), [reason],
+    notes = [reason, *details]
+    results = {"score": 0.0, "tests": tests, "notes": list(notes)}
+    return Grade(submission, dict.fromkeys(possible, 0.0), dict(possible), notes,
                  dict.fromkeys(possible, reason), results, None, seconds)
 
 
@@ -245,19 +249,35 @@ def _cell_problems(executed) -> list[str]:
 
 
 def _stop(process: subprocess.Popen, kernel_pid: Path) -> str:
-    """End the grading process and the kernel it started (one process group), after asking the
-    kernel for its threads' stacks; the log of the grading, with those stacks at its end."""
-    try:
-        os.kill(int(kernel_pid.read_text()), signal.SIGUSR1)
+    """End the grading process and its kernel, after asking the kernel for its threads' stacks;
+    the log of the grading, with those stacks at its end.
+
+    The kernel runs in a session of its own (jupyter_client starts it so), so it is signalled by
+    the process id it wrote, once that is seen to be a child of the grading process: a kernel
+    stuck in compiled code would not notice its parent's end."""
+    kernel = _child_pid(kernel_pid, process.pid)
+    if kernel is not None:
+        os.kill(kernel, signal.SIGUSR1)
         time.sleep(1.0)  # faulthandler writes from the signal handler, at once
-    except (OSError, ValueError):  # no kernel yet, or it has ended
-        pass
-    try:
+    with contextlib.suppress(ProcessLookupError):
         os.killpg(process.pid, signal.SIGKILL)
-    except ProcessLookupError:
-        pass
+    if kernel is not None:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(kernel, signal.SIGKILL)
     log, _ = process.communicate()
     return log or ""
+
+
+def _child_pid(pid_file: Path, parent: int) -> int | None:
+    """The process id in ``pid_file`` if that process is a child of ``parent`` (read from
+    Linux's ``/proc``; None elsewhere, and when the file or the process is gone)."""
+    try:
+        pid = int(pid_file.read_text())
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except (OSError, ValueError):
+        return None
+    # The fields after the command name, which is in parentheses: state, then the parent's id.
+    return pid if int(stat.rsplit(")", 1)[1].split()[1]) == parent else None
 
 
 def _tail(log: str, lines: int) -> str:
@@ -317,10 +337,9 @@ def grade(folder: Path, submission: Path, *, cell_seconds: float = CELL_SECONDS,
             log = _stop(process, kernel_pid)
             reason = (f"not graded: the grading was stopped after {total_seconds:g} s "
                       "(a cell that never ends and outlasts the per-cell limit?)")
-            stopped = _zero(submission, possible, reason, time.perf_counter() - started)
-            stopped.notes.append("the end of the grader's log, with the kernel's stacks:\n"
-                                 + _tail(log, LOG_LINES))
-            return stopped
+            stacks = ("the end of the grader's log, with the kernel's stacks:\n"
+                      + _tail(log, LOG_LINES))
+            return _zero(submission, possible, reason, time.perf_counter() - started, (stacks,))
         results_file = work / "results.json"
         if not results_file.exists():
             tail = _tail(log, 5)

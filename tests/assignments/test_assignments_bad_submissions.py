@@ -112,6 +112,7 @@ def test_a_cell_that_outlasts_its_time_limit_is_stopped_by_the_total_limit(kit):
     stacks = next(note for note in graded.notes if note.startswith("the end of the grader's log"))
     assert "(most recent call first)" in stacks
     assert re.search(r"line [34] in <module>", stacks), stacks
+    assert stacks in graded.results["notes"]  # the JSON the instructor reads has them too
 
 
 def _offline(tmp_path, args):
