@@ -6,8 +6,14 @@ The machinery itself lives in ``lab_harness.py``; see ``README.md`` beside this 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from lab_harness import NotebookRunner, browser_unavailable_reason, in_ci
+
+HERE = Path(__file__).resolve().parent
+#: The session's runner, once the fixture has made it (for the teardown hook below).
+_RUNNERS: list[NotebookRunner] = []
 
 
 def pytest_collection_modifyitems(config, items):
@@ -37,7 +43,17 @@ def notebook_runner(tmp_path_factory):
     started by the first test that opens a notebook; one page per notebook. See
     ``lab_harness.NotebookRunner``."""
     runner = NotebookRunner(lambda: tmp_path_factory.mktemp("jupyterlab"))
+    _RUNNERS.append(runner)
     try:
         yield runner
     finally:
         runner.close()
+
+
+def pytest_runtest_teardown(item, nextitem):
+    """Stop JupyterLab and Chromium once the last test of this folder has run, not at the end
+    of the session: the website and Binder tests that follow in the same shard would share the
+    cores with the last notebook's page and kernel (half a core for the rest of the shard)."""
+    if nextitem is None or HERE not in Path(nextitem.path).resolve().parents:
+        for runner in _RUNNERS:
+            runner.close()

@@ -3,12 +3,12 @@
 Used by ``conftest.py`` (fixtures) and ``test_jupyterlab.py`` (tests); kept out of the conftest
 so that the test module can import it by name.
 
-One JupyterLab server and one Chromium serve the whole test session. The server works on a
-temporary copy of the notebook folder, with its own settings, workspaces, config, data and
-runtime folders, so neither the repository nor the home directory is written to. Each notebook
-gets one new browser page; the tests of one notebook run one after the other on that page (the
-collection hook in conftest.py groups them), and the page and its kernel are shut down before
-the next notebook is opened.
+One JupyterLab server and one Chromium serve all the browser tests (stopped after the last of
+them, ``conftest.py``). The server works on a temporary copy of the notebook folder, with its
+own settings, workspaces, config, data and runtime folders, so neither the repository nor the
+home directory is written to. Each notebook gets one new browser page; the tests of one
+notebook run one after the other on that page (the collection hook in conftest.py groups them),
+and the page and its kernel are shut down before the next notebook is opened.
 
 Environment variables
 ---------------------
