@@ -3,8 +3,9 @@
 The vectorizable sine and cosine agree with the C library to two units in the last place within
 their range (and fail beyond it); the views without a reference count see and change the
 memory they point into; the stack buffer holds what is written to it; ``sincos`` gives the C
-library's sine and cosine. No test reads machine code or LLVM text: what the attributes buy is
-speed, which the benchmarks measure.
+library's sine and cosine, and near +-pi values within one unit in the last place. No test
+reads machine code or LLVM text: what the attributes buy is speed, which the benchmarks
+measure.
 """
 
 import math
@@ -105,6 +106,53 @@ def _paired(xs):
     return out
 
 
-def test_sincos_gives_the_c_librarys_sine_and_cosine():
-    xs = RNG.uniform(-1e3, 1e3, 1000)
-    np.testing.assert_array_equal(_paired(xs), np.column_stack([np.sin(xs), np.cos(xs)]))
+def _c_library(xs):
+    return np.array([[math.sin(x), math.cos(x)] for x in xs])
+
+
+def _shifted(xs):
+    """The angles of ``xs`` that :func:`lowlevel.sincos` moves by pi."""
+    size = np.abs(xs)
+    return xs[(size >= lowlevel.SHIFT_FROM) & (size <= lowlevel.SHIFT_TO)]
+
+
+def _worst_ulps_exact(xs, values):
+    """Largest difference of ``values`` (rows sin, cos) from the exact sine and cosine of
+    ``xs``, in units of the last place of the exact values."""
+    worst = 0.0
+    with mpmath.workprec(200):
+        for x, (sine, cosine) in zip(xs, values):
+            for got, exact in ((sine, mpmath.sin(x)), (cosine, mpmath.cos(x))):
+                exact = float(exact)
+                worst = max(worst, abs(got - exact) / np.spacing(abs(exact)))
+    return worst
+
+
+def test_sincos_gives_the_c_librarys_sine_and_cosine_away_from_pi():
+    xs = RNG.uniform(-1e3, 1e3, 2000)
+    kept = xs[~np.isin(xs, _shifted(xs))]
+    assert kept.size > 1900
+    np.testing.assert_array_equal(_paired(kept), _c_library(kept))
+
+
+def test_sincos_near_pi_is_within_one_unit_in_the_last_place():
+    # the range moved by pi, its ends, and the angles next to +-pi where the sine is tiny
+    near = np.concatenate([RNG.uniform(2.4, 4.0, 5000), -RNG.uniform(2.4, 4.0, 5000),
+                           [lowlevel.SHIFT_FROM, lowlevel.SHIFT_TO, np.pi, -np.pi]])
+    near = np.concatenate([near, np.nextafter(np.pi, [0.0, 4.0]) + [0.0, 0.0],
+                           np.pi + np.arange(-50, 51) * 1e-14])
+    got = _paired(near)
+    assert _worst_ulps_exact(near, got) <= 1.0
+    # the shift is taken there: some last bits differ from the C library's own reduction
+    assert not np.array_equal(got[np.isin(near, _shifted(near))],
+                              _c_library(_shifted(near)))
+    # odd sine, even cosine
+    np.testing.assert_array_equal(_paired(-near), got * [-1.0, 1.0])
+
+
+def test_pi_in_one_part_would_lose_the_sine_next_to_pi():
+    # negative control for the test above: without PI_2 the shifted argument is off by
+    # 1.2e-16, which is all of the sine where it is tiny
+    near = np.pi + np.arange(-50, 51) * 1e-14
+    one_part = [(-math.sin(x - lowlevel.PI_1), -math.cos(x - lowlevel.PI_1)) for x in near]
+    assert _worst_ulps_exact(near, one_part) > 1e3
