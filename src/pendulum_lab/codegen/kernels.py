@@ -139,8 +139,8 @@ def paired_trig(exprs: list[sp.Expr], mapping: dict) -> tuple[list[tuple], dict]
     substitution ``{sin(angle): sine, cos(angle): cosine}`` for the
     expressions. The kernels compute each pair with
     :func:`~pendulum_lab.codegen.lowlevel.sincos`; the C
-    yardstick of the benchmarks with C's ``sincos``, so that both do the same
-    arithmetic.
+    yardstick of the benchmarks with C's ``sincos`` behind the same shift near
+    ``+-pi``, so that both do the same arithmetic.
     """
     kinds = _trig_functions(exprs, mapping)
     pairs, substitution = [], {}

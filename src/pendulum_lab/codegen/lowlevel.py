@@ -276,7 +276,7 @@ def sincos(x):
     """``(sin(x), cos(x))``: :func:`_c_sincos`, at ``x - pi`` where ``|x|`` is near ``pi``.
 
     There ``sin(x) = -sin(x - pi)`` and ``cos(x) = -cos(x - pi)``, and ``x - PI_1`` is exact
-    (Sterbenz), so the shifted argument is the rounding of ``x - pi``: within one unit in the
+    (Sterbenz), so the shifted argument is ``x - pi`` rounded once: within one unit in the
     last place of the exact values (``tests/codegen/test_lowlevel.py``), and 21 ns instead of
     28 ns when each call waits for the last (docs/design/system-protocol.md). Elsewhere it is
     exactly the C library's ``sincos``.
