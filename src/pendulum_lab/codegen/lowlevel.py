@@ -19,7 +19,8 @@ llvmlite 0.50). Its tests pass with every minor release of Numba from 0.61 (llvm
 * **One ``sincos`` call** (:func:`sincos`): the sine and cosine of one angle from one call of
   the C library, sharing the argument reduction as a C compiler would; an angle near ``+-pi``
   is shifted by ``pi`` first, into the C library's fast branch (the Kapitza pendulum held
-  inverted: its cost per field evaluation 1.39 instead of 1.51 times the driven pendulum's).
+  inverted: its cost per field evaluation 1.39-1.45 instead of 1.49-1.51 times the driven
+  pendulum's, medians of benchmark item 15).
 * **Sines and cosines the compiler can vectorize** (:func:`lane_sin`, :func:`lane_cos`,
   :func:`lane_sincos`): the stage kernel of one or two links evaluates the field at 8 stages in
   one SIMD loop, which a call of the C library's ``sin`` would stop (LLVM cannot vectorize an
