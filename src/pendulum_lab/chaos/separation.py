@@ -117,8 +117,10 @@ def separation_between(a: Trajectory, b: Trajectory) -> Separation:
     The runs may differ in anything: the initial state (a perturbation of one
     unit in the last place), the step (``dt`` against ``dt / 2`` with
     ``save_every=2``), the method. Their distance shows what each difference
-    does to the trajectory; on a chaotic orbit every difference grows at the
-    same exponential rate, so the one that starts largest separates the runs
+    does to the trajectory. On a chaotic orbit a difference made once (the
+    start) grows at the orbit's exponential rate; a difference made every step
+    (the step size, the method) is fed a new local error each step, so at first
+    it grows faster, then at the same rate. The larger gap separates the runs
     first.
 
     Parameters
