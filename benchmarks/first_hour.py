@@ -142,11 +142,19 @@ def method_waits(src: Path, methods: list[str]) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def load_average() -> tuple[float, float, float] | None:
+    """The 1, 5 and 15 minute load averages, or None where there are none (Windows)."""
+    try:
+        return os.getloadavg()
+    except (AttributeError, OSError):
+        return None
+
+
 def markdown(label: str, src: Path, results: dict) -> str:
-    load = os.getloadavg()
+    load = " / ".join(f"{x:.2f}" for x in load_average() or ()) or "unknown"
     lines = [f"# First hour ({label}: {src})", "",
              f"{time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} cores, load average "
-             f"{load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}; empty kernel and Numba caches.", ""]
+             f"{load}; empty kernel and Numba caches.", ""]
     if "first_figure" in results:
         figure = results["first_figure"]
         lines += ["## Notebook 00 to its first figure", "",
@@ -195,12 +203,12 @@ def main(argv=None) -> int:
         import pendulum_lab as pl
 
         methods = list(pl.METHODS)
-    results = {"label": args.label, "src": str(src), "load_start": os.getloadavg()}
+    results = {"label": args.label, "src": str(src), "load_start": load_average()}
     if "figure" in wanted:
         results["first_figure"] = first_figure(src)
     if "methods" in wanted:
         results["methods"] = method_waits(src, methods)
-    results["load_end"] = os.getloadavg()
+    results["load_end"] = load_average()
     stem = args.out or HERE / "results" / f"first_hour_{args.label}"
     text = markdown(args.label, src, results)
     Path(f"{stem}.json").write_text(json.dumps(results, indent=1) + "\n")

@@ -9,6 +9,7 @@ way round, and a failing item is reported, not swallowed.
 """
 
 import math
+import os
 import shutil
 from pathlib import Path
 
@@ -188,7 +189,7 @@ def test_markdown_has_machine_table_and_details(suite, run):
         "compiler": "gcc",
         "env": {"OPENBLAS_NUM_THREADS": "1"},
         "load_start": (1.0, 1.0, 1.0),
-        "load_end": (2.0, 2.0, 2.0),
+        "load_end": None,  # Windows has no load average
     }
     row = suite.Row("3", "a | b", "1 s", "2 s", "2x", "peer/ours >= 10", "MISS (5.0x off)")
     section = suite.Section("long_run", "3. Long run", [row], ["a detail", "| x |"], {}, 1.0)
@@ -196,5 +197,34 @@ def test_markdown_has_machine_table_and_details(suite, run):
     assert "| # | benchmark | ours | peer | ratio | target | result |" in text
     assert "| 3 | a / b | 1 s | 2 s | 2x | peer/ours >= 10 | MISS (5.0x off) |" in text
     assert "OPENBLAS_NUM_THREADS=1" in text and "a CPU" in text
-    assert "2.00, 2.00, 2.00" in text and "SMOKE run" in text
+    assert "1.00, 1.00, 1.00; at end: unknown" in text and "SMOKE run" in text
     assert "a detail" in text and "| x |" in text
+
+
+def test_machine_description_without_proc_load_average_or_affinity(suite, monkeypatch):
+    """macOS and Windows have no /proc/cpuinfo, Windows no load average, neither an affinity
+    call: the description says what it can and "unknown" for the rest, and never fails."""
+    import harness
+
+    monkeypatch.setattr(harness, "CPUINFO", Path("/proc/no-such-cpuinfo"))
+    monkeypatch.delattr(os, "getloadavg")
+    monkeypatch.delattr(os, "sched_getaffinity", raising=False)
+    monkeypatch.setattr(harness.platform, "processor", lambda: "Intel64 Family 6 Model 85")
+    machine = harness.machine_description()
+    assert machine["cpu"] == "Intel64 Family 6 Model 85"
+    assert machine["load_start"] is None and machine["cores_available"] is None
+    assert harness.load_text(machine["load_start"]) == "unknown"
+    monkeypatch.setattr(harness.platform, "processor", lambda: "")  # Linux says nothing there
+    assert harness.cpu_name() == "unknown"
+
+
+def test_machine_description_reads_the_model_name_where_proc_has_it(suite, monkeypatch,
+                                                                      tmp_path):
+    import harness
+
+    cpuinfo = tmp_path / "cpuinfo"
+    cpuinfo.write_text("processor\t: 0\nmodel name\t: A Test CPU @ 2.0GHz\n", encoding="utf-8")
+    monkeypatch.setattr(harness, "CPUINFO", cpuinfo)
+    monkeypatch.setattr(harness.platform, "processor", lambda: "not this")
+    assert harness.cpu_name() == "A Test CPU @ 2.0GHz"
+    assert harness.load_text((0.5, 1.0, 1.25)) == "0.50, 1.00, 1.25"
