@@ -250,7 +250,8 @@ def compiler_version() -> str:
     """First line of ``gcc --version``, or ``"not found"``."""
     if shutil.which(COMPILER) is None:
         return "not found"
-    out = subprocess.run([COMPILER, "--version"], capture_output=True, text=True, check=False)
+    out = subprocess.run([COMPILER, "--version"], capture_output=True, text=True,
+                         encoding="utf-8", errors="replace", check=False)
     return out.stdout.splitlines()[0] if out.stdout else "unknown"
 
 
@@ -269,6 +270,8 @@ class CLoop:
             [str(self.executable), *map(repr, self.params), *args],
             capture_output=True,
             text=True,
+            encoding="utf-8",
+            errors="replace",
             check=False,
         )
         if out.returncode != 0:
@@ -325,9 +328,10 @@ def build(model, workdir) -> CLoop:
     stem = ("driven_" if model.forced else "") + ("sp_rk4" if model.n == 1 else "dp_rk4")
     source = workdir / f"{stem}.c"
     executable = workdir / stem
-    source.write_text(c_source(model.chain))
+    source.write_text(c_source(model.chain), encoding="utf-8")
     command = [COMPILER, *FLAGS, "-o", str(executable), str(source), "-lm"]
-    out = subprocess.run(command, capture_output=True, text=True, check=False)
+    out = subprocess.run(command, capture_output=True, text=True, encoding="utf-8",
+                         errors="replace", check=False)
     if out.returncode != 0:
         raise RuntimeError(f"compiling the C yardstick failed:\n{out.stderr}")
     params = tuple(float(x) for x in model.parameter_values.values())

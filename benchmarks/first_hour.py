@@ -134,7 +134,7 @@ def method_waits(src: Path, methods: list[str]) -> dict:
     try:
         done = subprocess.run([sys.executable, "-c", METHODS_SCRIPT, *methods],
                               env=environment(src, caches), capture_output=True, text=True,
-                              timeout=7200, check=False)
+                              encoding="utf-8", errors="replace", timeout=7200, check=False)
     finally:
         folder.cleanup()
     if done.returncode != 0:
@@ -211,8 +211,8 @@ def main(argv=None) -> int:
     results["load_end"] = load_average()
     stem = args.out or HERE / "results" / f"first_hour_{args.label}"
     text = markdown(args.label, src, results)
-    Path(f"{stem}.json").write_text(json.dumps(results, indent=1) + "\n")
-    Path(f"{stem}.md").write_text(text + "\n")
+    Path(f"{stem}.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    Path(f"{stem}.md").write_text(text + "\n", encoding="utf-8")
     print(text)
     return 0
 

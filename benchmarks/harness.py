@@ -346,6 +346,7 @@ def child_json(args: list[str], what: str, *, env: dict | None = None,
     """The JSON object that ``python *args`` prints on its last line; a RuntimeError naming
     ``what``, with the end of the child's stderr, if it fails."""
     done = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
+                          encoding="utf-8", errors="replace",
                           timeout=timeout, check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{what} failed: {done.stderr.strip()[-500:]}")
@@ -441,7 +442,8 @@ def load_text(load, separator: str = ", ") -> str:
 def _git(*args) -> str:
     try:
         out = subprocess.run(
-            ["git", "-C", str(HERE), *args], capture_output=True, text=True, check=False, timeout=10
+            ["git", "-C", str(HERE), *args], capture_output=True, text=True, encoding="utf-8",
+            errors="replace", check=False, timeout=10,
         )
     except (OSError, subprocess.TimeoutExpired):
         return ""

@@ -47,6 +47,8 @@ def _fresh_process(code: str, env: dict | None = None) -> Sample:
         env=env,
         capture_output=True,
         text=True,
+        encoding="utf-8",
+        errors="replace",
         check=False,
     )
     if out.returncode != 0:
@@ -150,7 +152,8 @@ def bench_first_use(cfg: Config) -> Section:
         )
     phases = json.loads(
         subprocess.run(
-            [sys.executable, "-c", PHASES], capture_output=True, text=True, check=True
+            [sys.executable, "-c", PHASES], capture_output=True, text=True, encoding="utf-8",
+            errors="replace", check=True,
         ).stdout
     )
     data["phases"] = phases
@@ -177,6 +180,8 @@ def _import_times() -> list[tuple[str, float]]:
         [sys.executable, "-X", "importtime", "-c", "import pendulum_lab"],
         capture_output=True,
         text=True,
+        encoding="utf-8",
+        errors="replace",
         check=False,
     )
     heavy = {"numpy", "scipy", "sympy", "numba", "matplotlib", "ipywidgets", "tqdm", "llvmlite"}

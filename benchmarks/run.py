@@ -154,7 +154,7 @@ def main(argv=None) -> int:
         targets = [suite.RESULTS / f"{stamp}{suffix}.md"]
     for target in targets:
         target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(text)
+        target.write_text(text, encoding="utf-8")
         print(f"written: {target}")
     if suffix == "":
         latest = suite.RESULTS / "latest.md"

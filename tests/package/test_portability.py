@@ -16,8 +16,6 @@ import sys
 import types
 from pathlib import Path
 
-import pytest
-
 from pendulum_lab import validation
 
 REPO = Path(__file__).resolve().parents[2]
@@ -98,3 +96,99 @@ def test_this_machine_reports_its_memory():
     total, available = validation.physical_memory(), validation.available_memory()
     assert total is not None and total > 2**28  # more than 256 MB
     assert available is not None and 0 < available <= total
+
+
+# ---------------------------------------------------------------- text files (every module)
+#: Calls that read or write text in the locale's encoding unless told otherwise (cp1252 on
+#: most Windows machines: a UTF-8 file with a "μ" or an "→" fails to read there).
+PROCESS_CALLS = {"run", "Popen", "check_output"}
+#: Modules that other work is changing at the moment; their text calls are listed in
+#: docs/portability.md and must be given an encoding there.
+ELSEWHERE = {"src/pendulum_lab/codegen/cache.py", "tools/assignments.py"}
+
+
+#: Owners whose ``open`` is not a text file (images, archives, browsers, file descriptors).
+NOT_TEXT_OPEN = {"Image", "webbrowser", "tarfile", "zipfile", "os", "gzip"}
+
+
+def _binary_mode(call: ast.Call, position: int) -> bool:
+    modes = [kw.value for kw in call.keywords if kw.arg == "mode"]
+    if len(call.args) > position:
+        modes.append(call.args[position])
+    return any(isinstance(m, ast.Constant) and isinstance(m.value, str) and "b" in m.value
+               for m in modes)
+
+
+def _reads_or_writes_text(call: ast.Call) -> bool:
+    func = call.func
+    if isinstance(func, ast.Name):
+        name, owner = func.id, None
+    elif isinstance(func, ast.Attribute):
+        name, owner = func.attr, func.value
+    else:
+        return False
+    if name in {"read_text", "write_text", "TextIOWrapper"}:
+        return True
+    if name == "open":
+        if isinstance(owner, ast.Name) and owner.id in NOT_TEXT_OPEN:
+            return False
+        return not _binary_mode(call, 1 if owner is None else 0)  # open(path, mode), p.open(mode)
+    if name == "fdopen":
+        return not _binary_mode(call, 1)
+    if name in PROCESS_CALLS:
+        keywords = {kw.arg: kw.value for kw in call.keywords}
+        return any(isinstance(keywords.get(flag), ast.Constant) and keywords[flag].value is True
+                   for flag in ("text", "universal_newlines"))
+    return False
+
+
+def text_calls_without_encoding(source: str) -> list[int]:
+    """Line numbers of calls that read or write text without naming an encoding: ``open``,
+    ``Path.open``/``read_text``/``write_text``, ``os.fdopen`` in text mode, and ``subprocess``
+    calls with ``text=True`` or ``universal_newlines=True``."""
+    return sorted(
+        node.lineno for node in ast.walk(ast.parse(source))
+        if isinstance(node, ast.Call) and _reads_or_writes_text(node)
+        # an encoding named, or passed on in **kwargs
+        and not any(kw.arg in ("encoding", None) for kw in node.keywords))
+
+
+def test_every_text_file_and_pipe_names_its_encoding():
+    found = {}
+    for folder in ("src", "tools", "benchmarks", "docs"):
+        for path in sorted((REPO / folder).rglob("*.py")):
+            relative = path.relative_to(REPO).as_posix()
+            if relative in ELSEWHERE:
+                continue
+            lines = text_calls_without_encoding(path.read_text(encoding="utf-8"))
+            if lines:
+                found[relative] = lines
+    assert found == {}, f"pass encoding='utf-8' (or open in binary mode) at {found}"
+
+
+def test_the_encoding_scan_finds_what_it_looks_for():
+    # negative controls for the test above: each form it must find, and the forms it passes
+    unnamed = """
+import subprocess
+from pathlib import Path
+open("a.txt")
+open("a.txt", "w")
+Path("a").read_text()
+Path("a").open("a")
+folder.write_text("x")
+subprocess.run(["x"], text=True)
+subprocess.Popen(["x"], universal_newlines=True)
+os.fdopen(fd, "w")
+"""
+    assert text_calls_without_encoding(unnamed) == [4, 5, 6, 7, 8, 9, 10, 11]
+    named = """
+open("a.txt", encoding="utf-8")
+open("a.bin", "rb")
+Path("a").open("wb")
+Path("a").read_text(encoding="ascii")
+subprocess.run(["x"], text=True, encoding="utf-8")
+subprocess.run(["x"], capture_output=True)
+os.fdopen(fd, "wb")
+Image.open(gif)
+"""
+    assert text_calls_without_encoding(named) == []
