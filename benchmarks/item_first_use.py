@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import json
+import math
 import os
-import resource
 import subprocess
 import sys
 import tempfile
+
+try:
+    import resource
+except ImportError:  # Windows: no resource usage of finished children
+    resource = None
 
 from harness import Config, Row, Sample, Section, fmt_time, interleave, med, timed, verdict
 
@@ -34,6 +39,10 @@ print(json.dumps({"import pendulum_lab": t1 - t0, "pl.double_pendulum()": t2 - t
 
 
 def _children_cpu() -> float:
+    """CPU seconds of the finished children (POSIX); NaN where the system does not count
+    them (Windows), so the item reports its wall times without CPU."""
+    if resource is None:
+        return math.nan
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
 

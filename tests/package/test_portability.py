@@ -192,3 +192,40 @@ os.fdopen(fd, "wb")
 Image.open(gif)
 """
     assert text_calls_without_encoding(named) == []
+
+
+# ---------------------------------------------------------------- the launcher (app/cli.py)
+def test_the_launcher_becomes_jupyterlab_on_posix_and_runs_it_as_a_child_on_windows(
+        monkeypatch):
+    from pendulum_lab.app import cli
+
+    calls = []
+    monkeypatch.setattr(os, "execv", lambda path, args: calls.append(("execv", args)))
+    monkeypatch.setattr(cli.subprocess, "call", lambda args: calls.append(("call", args)) or 3)
+    monkeypatch.setattr(os, "name", "nt")
+    assert cli._run(["python", "-m", "jupyterlab"]) == 3
+    assert calls == [("call", ["python", "-m", "jupyterlab"])]
+    # control: on POSIX the process is replaced (execv), no child is started
+    calls.clear()
+    monkeypatch.setattr(os, "name", "posix")
+    cli._run(["python", "-m", "jupyterlab"])
+    assert calls[0] == ("execv", ["python", "-m", "jupyterlab"])
+
+
+def test_the_launcher_asks_for_allow_root_only_where_there_is_a_root(monkeypatch):
+    from pendulum_lab.app import cli
+
+    monkeypatch.delattr(os, "geteuid", raising=False)  # Windows has no user ids
+    assert "--allow-root" not in cli.lab_command(REPO, no_browser=True)
+    monkeypatch.setattr(os, "geteuid", lambda: 0, raising=False)
+    assert "--allow-root" in cli.lab_command(REPO, no_browser=True)
+
+
+def test_the_install_hint_works_in_every_shell(monkeypatch, capsys):
+    # single quotes are not quotes in Windows' cmd: the hint uses double quotes
+    from pendulum_lab.app import cli
+
+    monkeypatch.setattr(cli.importlib.util, "find_spec", lambda name: None)
+    assert cli.run_lab(types.SimpleNamespace()) == 1
+    hint = capsys.readouterr().err
+    assert 'python -m pip install "pendulum_lab[lab]"' in hint and "'" not in hint
