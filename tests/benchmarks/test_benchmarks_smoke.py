@@ -228,3 +228,24 @@ def test_machine_description_reads_the_model_name_where_proc_has_it(suite, monke
     monkeypatch.setattr(harness.platform, "processor", lambda: "not this")
     assert harness.cpu_name() == "A Test CPU @ 2.0GHz"
     assert harness.load_text((0.5, 1.0, 1.25)) == "0.50, 1.00, 1.25"
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler")
+def test_c_loop_without_sincos_calls_sin_and_cos_as_the_kernels_do_there(suite, tmp_path,
+                                                                         monkeypatch):
+    """macOS and Windows (emulated): the C library has no sincos, the kernels call sin and cos
+    without the shift near pi, and so does the C yardstick."""
+    from pendulum_lab.codegen import lowlevel
+
+    dp = pl.double_pendulum()
+    with_sincos = suite.c_yardstick.c_source(dp.chain)
+    monkeypatch.setattr(lowlevel, "HAVE_SINCOS", False)
+    monkeypatch.setattr(lowlevel, "SHIFT_NEAR_PI", False)
+    source = suite.c_yardstick.c_source(dp.chain)
+    assert "sincos(" in with_sincos and "sincos(" not in source.replace("paired_sincos(", "")
+    assert "*s = sin(x);" in source and "*c = cos(x);" in source
+    loop = suite.c_yardstick.build(dp, tmp_path)  # it compiles, and it moves the same way
+    theta0, omega0 = np.array([2.0, 2.5]), np.zeros(2)
+    run = loop.single(theta0, dp.momenta(theta0, omega0), 100, 0.01)
+    traj = pl.simulate(dp, theta0, omega0, t_end=1.0, dt=0.01, method="rk4")
+    assert np.max(np.abs(run.theta - traj.theta[-1])) <= 1e-9
