@@ -177,9 +177,9 @@ def test_compiled_steps_match_their_references_in_a_process_without_sincos(tmp_p
     # RK4 evaluates the kernels' sincos at every stage; glrk4's stage kernel has its own
     # sines (lane_sincos) beside the kernels' for the step's end
     test = "tests/integrators/test_reference_steps.py::test_compiled_step_is_the_reference_step"
-    cases = [f"{test}[{case}]" for case in ("rk4-2", "rk4-3", "glrk4-2")]
+    cases = [f"{test}[{case}]" for case in ("rk4-2", "glrk4-2")]
     done = subprocess.run(
         [sys.executable, "-c", prelude, "-q", "-p", "no:cacheprovider", *cases],
         cwd=REPO, env=env, capture_output=True, text=True, timeout=900, check=False)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
-    assert "3 passed" in done.stdout
+    assert "2 passed" in done.stdout
