@@ -264,8 +264,12 @@ def _c_sincos(typingctx, x):
     (the mass matrix has ``cos(theta_i - theta_j)``, the forces
     ``sin(theta_i - theta_j)``); one call shares the argument reduction, as a C
     compiler arranges by itself (LLVM, behind Numba, does not). glibc's
-    ``sincos`` returns exactly ``sin(x)`` and ``cos(x)``. Without ``sincos`` in
-    the C library, two separate calls.
+    ``sincos`` returns exactly ``sin(x)`` and ``cos(x)``. Without :data:`HAVE_SINCOS`
+    (macOS, Windows), ``llvm.sin`` and ``llvm.cos``: LLVM's back end turns them into the
+    system's paired call where its table of C library functions lists one (glibc's
+    ``sincos``: kernels compiled here with :data:`HAVE_SINCOS` forced off still call it;
+    Apple's ``__sincos_stret``) and into two calls elsewhere, so it never names a symbol the
+    process lacks.
     """
     if not isinstance(x, types.Float):
         return None
