@@ -134,7 +134,7 @@ def method_waits(src: Path, methods: list[str]) -> dict:
     try:
         done = subprocess.run([sys.executable, "-c", METHODS_SCRIPT, *methods],
                               env=environment(src, caches), capture_output=True, text=True,
-                              timeout=7200, check=False)
+                              encoding="utf-8", errors="replace", timeout=7200, check=False)
     finally:
         folder.cleanup()
     if done.returncode != 0:
@@ -142,11 +142,19 @@ def method_waits(src: Path, methods: list[str]) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def load_average() -> tuple[float, float, float] | None:
+    """The 1, 5 and 15 minute load averages, or None where there are none (Windows)."""
+    try:
+        return os.getloadavg()
+    except (AttributeError, OSError):
+        return None
+
+
 def markdown(label: str, src: Path, results: dict) -> str:
-    load = os.getloadavg()
+    load = " / ".join(f"{x:.2f}" for x in load_average() or ()) or "unknown"
     lines = [f"# First hour ({label}: {src})", "",
              f"{time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} cores, load average "
-             f"{load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}; empty kernel and Numba caches.", ""]
+             f"{load}; empty kernel and Numba caches.", ""]
     if "first_figure" in results:
         figure = results["first_figure"]
         lines += ["## Notebook 00 to its first figure", "",
@@ -195,16 +203,16 @@ def main(argv=None) -> int:
         import pendulum_lab as pl
 
         methods = list(pl.METHODS)
-    results = {"label": args.label, "src": str(src), "load_start": os.getloadavg()}
+    results = {"label": args.label, "src": str(src), "load_start": load_average()}
     if "figure" in wanted:
         results["first_figure"] = first_figure(src)
     if "methods" in wanted:
         results["methods"] = method_waits(src, methods)
-    results["load_end"] = os.getloadavg()
+    results["load_end"] = load_average()
     stem = args.out or HERE / "results" / f"first_hour_{args.label}"
     text = markdown(args.label, src, results)
-    Path(f"{stem}.json").write_text(json.dumps(results, indent=1) + "\n")
-    Path(f"{stem}.md").write_text(text + "\n")
+    Path(f"{stem}.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    Path(f"{stem}.md").write_text(text + "\n", encoding="utf-8")
     print(text)
     return 0
 

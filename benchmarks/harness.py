@@ -346,6 +346,7 @@ def child_json(args: list[str], what: str, *, env: dict | None = None,
     """The JSON object that ``python *args`` prints on its last line; a RuntimeError naming
     ``what``, with the end of the child's stderr, if it fails."""
     done = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
+                          encoding="utf-8", errors="replace",
                           timeout=timeout, check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{what} failed: {done.stderr.strip()[-500:]}")
@@ -372,17 +373,10 @@ def max_relative_energy_error(energy) -> float:
 # --------------------------------------------------------------------------- machine
 def machine_description() -> dict:
     """CPU, cores, load, versions and the environment variables that steer threads."""
-    cpu = "unknown"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_name()
     try:
         affinity = len(os.sched_getaffinity(0))
-    except AttributeError:
+    except AttributeError:  # macOS and Windows have no affinity call
         affinity = None
     versions = {}
     for module in ("numpy", "scipy", "sympy", "numba", "matplotlib", "ipywidgets"):
@@ -412,14 +406,44 @@ def machine_description() -> dict:
         "numba_threads": numba.config.NUMBA_NUM_THREADS,
         "compiler": c_yardstick.compiler_version(),
         "env": threads,
-        "load_start": os.getloadavg(),
+        "load_start": load_average(),
     }
+
+
+#: Linux's description of the processors (absent on macOS and Windows, and in some sandboxes).
+CPUINFO = Path("/proc/cpuinfo")
+
+
+def cpu_name() -> str:
+    """The processor's model name: Linux's ``/proc/cpuinfo``, else what ``platform`` says
+    (Windows: family and vendor; macOS: ``arm`` or ``i386``), else ``"unknown"``."""
+    try:
+        for line in CPUINFO.read_text(encoding="utf-8", errors="replace").splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def load_average() -> tuple[float, float, float] | None:
+    """The 1, 5 and 15 minute load averages, or None where there are none (Windows)."""
+    try:
+        return os.getloadavg()
+    except (AttributeError, OSError):
+        return None
+
+
+def load_text(load, separator: str = ", ") -> str:
+    """A :func:`load_average` for a report: ``"0.52, 0.61, 0.70"``, or ``"unknown"``."""
+    return "unknown" if load is None else separator.join(f"{x:.2f}" for x in load)
 
 
 def _git(*args) -> str:
     try:
         out = subprocess.run(
-            ["git", "-C", str(HERE), *args], capture_output=True, text=True, check=False, timeout=10
+            ["git", "-C", str(HERE), *args], capture_output=True, text=True, encoding="utf-8",
+            errors="replace", check=False, timeout=10,
         )
     except (OSError, subprocess.TimeoutExpired):
         return ""

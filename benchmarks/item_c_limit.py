@@ -96,7 +96,7 @@ def bench_c_limit(cfg: Config, cloop: c_yardstick.CLoop | None) -> Section:
             "PASS" if egap <= 1e-9 else "MISS",
         )
     )
-    source = cloop.source.read_text()
+    source = cloop.source.read_text(encoding="utf-8")
     details = [
         f"Generated from `pl.derive_chain(2)`: the mass matrix and dL/dq printed with "
         f"`sympy.ccode` after `sympy.cse` (the Hamiltonian form our kernels use: "

@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import json
+import math
 import os
-import resource
 import subprocess
 import sys
 import tempfile
+
+try:
+    import resource
+except ImportError:  # Windows: no resource usage of finished children
+    resource = None
 
 from harness import Config, Row, Sample, Section, fmt_time, interleave, med, timed, verdict
 
@@ -34,6 +39,10 @@ print(json.dumps({"import pendulum_lab": t1 - t0, "pl.double_pendulum()": t2 - t
 
 
 def _children_cpu() -> float:
+    """CPU seconds of the finished children (POSIX); NaN where the system does not count
+    them (Windows), so the item reports its wall times without CPU."""
+    if resource is None:
+        return math.nan
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
 
@@ -47,6 +56,8 @@ def _fresh_process(code: str, env: dict | None = None) -> Sample:
         env=env,
         capture_output=True,
         text=True,
+        encoding="utf-8",
+        errors="replace",
         check=False,
     )
     if out.returncode != 0:
@@ -150,7 +161,8 @@ def bench_first_use(cfg: Config) -> Section:
         )
     phases = json.loads(
         subprocess.run(
-            [sys.executable, "-c", PHASES], capture_output=True, text=True, check=True
+            [sys.executable, "-c", PHASES], capture_output=True, text=True, encoding="utf-8",
+            errors="replace", check=True,
         ).stdout
     )
     data["phases"] = phases
@@ -177,6 +189,8 @@ def _import_times() -> list[tuple[str, float]]:
         [sys.executable, "-X", "importtime", "-c", "import pendulum_lab"],
         capture_output=True,
         text=True,
+        encoding="utf-8",
+        errors="replace",
         check=False,
     )
     heavy = {"numpy", "scipy", "sympy", "numba", "matplotlib", "ipywidgets", "tqdm", "llvmlite"}

@@ -24,7 +24,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from harness import HERE, Config, Row, Section, fmt_time, median, verdict
+from harness import HERE, Config, Row, Section, fmt_time, load_average, median, verdict
 
 BROWSER = HERE.parent / "tests" / "browser"
 DEMO = BROWSER / "live_demo"
@@ -150,7 +150,7 @@ def _frame_rate(seconds: float) -> dict:
             measured = page.evaluate(COUNT_FRAMES, int(seconds * 1000))
             measured["chromium_args"] = CHROMIUM_ARGS
             measured["version"] = runner.browser.version
-            measured["load"] = os.getloadavg()[0]
+            measured["load"] = (load_average() or [None])[0]
             return measured
         finally:
             runner.close()

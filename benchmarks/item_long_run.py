@@ -182,7 +182,7 @@ def bench_long_run(cfg: Config) -> Section:
         found["date"] = datetime.date.today().isoformat()
         if cfg.name == "full":
             RESULTS.mkdir(parents=True, exist_ok=True)
-            SEARCH_CACHE.write_text(json.dumps(found, indent=2) + "\n")
+            SEARCH_CACHE.write_text(json.dumps(found, indent=2) + "\n", encoding="utf-8")
     candidates = {m: v for m, v in found["ours"].items() if v.get("dt")}
     rtol = found["dop853"].get("rtol")
     data = {"search": found}
@@ -331,7 +331,7 @@ def _search_dop(cfg, run_dop, details) -> dict:
 
 def _load_search(cfg: Config) -> dict | None:
     try:
-        found = json.loads(SEARCH_CACHE.read_text())
+        found = json.loads(SEARCH_CACHE.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         found = None
     if found is None or found.get("T") != cfg.long_t_end or found.get("tol") != cfg.long_tol:

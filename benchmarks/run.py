@@ -15,7 +15,6 @@ copies it to ``benchmarks/results/latest.md``. ``--out FILE`` writes only FILE.
 from __future__ import annotations
 
 import argparse
-import os
 import shutil
 import sys
 import time
@@ -36,8 +35,7 @@ def markdown(cfg, machine: dict, sections, keys, seconds: float) -> str:
     """The whole results file: header with the machine, the table, the details."""
     m = machine
     env = ", ".join(f"{k}={v}" for k, v in m["env"].items()) or "none set"
-    load_start = ", ".join(f"{x:.2f}" for x in m["load_start"])
-    load_end = ", ".join(f"{x:.2f}" for x in m["load_end"])
+    load_start, load_end = suite.load_text(m["load_start"]), suite.load_text(m["load_end"])
     versions = ", ".join(f"{k} {v}" for k, v in m["versions"].items())
     lines = [
         f"# pendulum_lab benchmarks ({cfg.name} run, {m['date']})",
@@ -137,7 +135,7 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     sections = suite.run_items(cfg, keys, log=lambda msg: print(msg, flush=True))
     seconds = time.perf_counter() - start
-    machine["load_end"] = os.getloadavg()
+    machine["load_end"] = suite.load_average()
     text = markdown(cfg, machine, sections, keys, seconds)
     print()
     print(text_table(sections))
@@ -156,7 +154,7 @@ def main(argv=None) -> int:
         targets = [suite.RESULTS / f"{stamp}{suffix}.md"]
     for target in targets:
         target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(text)
+        target.write_text(text, encoding="utf-8")
         print(f"written: {target}")
     if suffix == "":
         latest = suite.RESULTS / "latest.md"

@@ -27,6 +27,8 @@ from harness import (
     Row,
     Section,
     double_pendulum,
+    load_average,
+    load_text,
     machine_description,
     verdict,
 )
@@ -57,6 +59,8 @@ __all__ = [
     "Row",
     "Section",
     "c_yardstick",
+    "load_average",
+    "load_text",
     "machine_description",
     "resolve",
     "run_items",

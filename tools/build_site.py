@@ -117,7 +117,8 @@ def build(
     lines = []
     for attempt in (1, 2):
         with subprocess.Popen(command, cwd=REPO_ROOT, env=env, stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, text=True, bufsize=1) as process:
+                              stderr=subprocess.STDOUT, text=True, encoding="utf-8",
+                              errors="replace", bufsize=1) as process:
             for line in process.stdout:
                 lines.append(line)
                 if echo and "IPKernelApp" not in line:
@@ -135,7 +136,7 @@ def build(
 def report(result: BuildResult) -> dict:
     """Wall time, exit code, and which notebooks this build ran or took from the cache."""
     execution = result.output.parent / "execution.json"
-    notebooks = json.loads(execution.read_text()) if execution.exists() else {}
+    notebooks = json.loads(execution.read_text(encoding="utf-8")) if execution.exists() else {}
     ran = sorted(name for name, row in notebooks.items() if row["ran_in_this_build"])
     return {
         "seconds": round(result.seconds, 1),
@@ -165,7 +166,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"build_site: {err}", file=sys.stderr)
         return 2
     facts = report(result)
-    (OUTPUT.parent / "build.json").write_text(json.dumps(facts, indent=1) + "\n")
+    (OUTPUT.parent / "build.json").write_text(json.dumps(facts, indent=1) + "\n",
+                                              encoding="utf-8")
     verdict = "built" if result.ok else "FAILED (warnings are errors)"
     print(
         f"site {verdict} in {result.seconds:.1f} s ({len(facts['notebooks_run'])} of "

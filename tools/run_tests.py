@@ -71,7 +71,7 @@ def run_sharded(extra: list[str], floors: str | None) -> int:
         running, codes, minutes = {}, {}, {}
 
         def start(name, command, env):
-            log = open(Path(logs) / f"{name}.log", "w+")  # noqa: SIM115 (closed below)
+            log = open(Path(logs) / f"{name}.log", "w+", encoding="utf-8")  # noqa: SIM115 (closed below)
             running[name] = (subprocess.Popen(command, cwd=ROOT, stdout=log, env=env,
                                               stderr=subprocess.STDOUT), log,
                              time.perf_counter())

@@ -325,13 +325,13 @@ def check_package(app) -> None:
     cache = Path(app.config.nb_execution_cache_path or build_dir / ".jupyter_cache")
     stamp = build_dir / FINGERPRINT_FILE
     current = package_fingerprint()
-    previous = stamp.read_text() if stamp.exists() else None
+    previous = stamp.read_text(encoding="utf-8") if stamp.exists() else None
     app.env.course_package_changed = previous != current
     if previous is not None and previous != current:
         logger.info("pendulum_lab changed since the last build: every notebook runs again")
         shutil.rmtree(cache, ignore_errors=True)
     stamp.parent.mkdir(parents=True, exist_ok=True)
-    stamp.write_text(current)
+    stamp.write_text(current, encoding="utf-8")
     app.course_build_started = time.time()
 
 
@@ -397,7 +397,8 @@ def write_execution_report(app, exception) -> None:
                 "ran_in_this_build": bool(data.get("mtime") and data["mtime"] >= started),
                 "seconds": data.get("runtime"),
             }
-    (Path(app.outdir).parent / "execution.json").write_text(json.dumps(report, indent=1) + "\n")
+    (Path(app.outdir).parent / "execution.json").write_text(json.dumps(report, indent=1) + "\n",
+                                                                  encoding="utf-8")
 
 
 def outdated_notebooks(app, env, added, changed, removed):

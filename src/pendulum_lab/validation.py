@@ -7,8 +7,10 @@ says which argument was wrong and what is accepted, before any work starts.
 
 from __future__ import annotations
 
+import ctypes
 import numbers
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -198,7 +200,13 @@ def output_folder(name: str, value) -> Path:
 
 
 def physical_memory() -> int | None:
-    """Bytes of RAM of this machine, or None where the system does not say."""
+    """Bytes of RAM of this machine, or None where the system does not say.
+
+    Windows: ``GlobalMemoryStatusEx``; Linux and macOS: ``sysconf`` (pages times page size).
+    """
+    if sys.platform == "win32":
+        status = _windows_memory_status()
+        return None if status is None else status[0]
     try:
         return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     except (AttributeError, ValueError, OSError):
@@ -206,16 +214,51 @@ def physical_memory() -> int | None:
 
 
 def available_memory() -> int | None:
-    """Bytes of memory available to a new computation now (Linux's ``MemAvailable``: free
-    memory plus the caches the system can drop), else :func:`physical_memory`."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as info:
-            for line in info:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
+    """Bytes of memory available to a new computation now, else :func:`physical_memory`.
+
+    Linux: ``MemAvailable`` of ``/proc/meminfo`` (free memory plus the caches the system can
+    drop); Windows: ``GlobalMemoryStatusEx``'s available physical memory; macOS, and Linux
+    without ``/proc`` (some sandboxes): the physical memory, which at least bounds it.
+    """
+    if sys.platform == "win32":
+        status = _windows_memory_status()
+        if status is not None:
+            return status[1]
+    elif sys.platform.startswith("linux"):
+        try:
+            with open(MEMINFO, encoding="ascii") as info:
+                for line in info:
+                    if line.startswith("MemAvailable:"):
+                        return int(line.split()[1]) * 1024
+        except (OSError, ValueError, IndexError):
+            pass
     return physical_memory()
+
+
+#: Linux's memory figures (absent on macOS and Windows, and in some sandboxes).
+MEMINFO = "/proc/meminfo"
+
+
+class _MemoryStatus(ctypes.Structure):
+    """Windows' ``MEMORYSTATUSEX``, filled by ``GlobalMemoryStatusEx``."""
+
+    _fields_ = [("dwLength", ctypes.c_uint32), ("dwMemoryLoad", ctypes.c_uint32),
+                *((name, ctypes.c_uint64) for name in (
+                    "ullTotalPhys", "ullAvailPhys", "ullTotalPageFile", "ullAvailPageFile",
+                    "ullTotalVirtual", "ullAvailVirtual", "ullAvailExtendedVirtual"))]
+
+
+def _windows_memory_status() -> tuple[int, int] | None:
+    """``(total, available)`` bytes of physical memory on Windows, or None if it fails."""
+    status = _MemoryStatus()
+    status.dwLength = ctypes.sizeof(_MemoryStatus)
+    try:
+        filled = ctypes.windll.kernel32.GlobalMemoryStatusEx(ctypes.byref(status))
+    except (AttributeError, OSError):
+        return None
+    if not filled or status.ullTotalPhys == 0:
+        return None
+    return int(status.ullTotalPhys), int(status.ullAvailPhys)
 
 
 def bytes_text(size: float) -> str:

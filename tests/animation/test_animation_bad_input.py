@@ -8,6 +8,7 @@ pathlib's or matplotlib's errors, ffmpeg's command line, or hours of drawing.
 
 import time
 import warnings
+from pathlib import Path
 
 import pytest
 
@@ -64,6 +65,8 @@ CASES = {
 
 @pytest.mark.parametrize("case", CASES)
 def test_bad_input_is_refused_before_any_frame_is_drawn(case, folder):
+    if "/proc" in case and not Path("/proc").is_dir():
+        pytest.skip("no /proc on this system (macOS, Windows): a folder that cannot be written")
     call, error, message = CASES[case]
     start = time.perf_counter()
     with pytest.raises(error, match=message):

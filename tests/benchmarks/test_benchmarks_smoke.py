@@ -9,6 +9,7 @@ way round, and a failing item is reported, not swallowed.
 """
 
 import math
+import os
 import shutil
 from pathlib import Path
 
@@ -188,7 +189,7 @@ def test_markdown_has_machine_table_and_details(suite, run):
         "compiler": "gcc",
         "env": {"OPENBLAS_NUM_THREADS": "1"},
         "load_start": (1.0, 1.0, 1.0),
-        "load_end": (2.0, 2.0, 2.0),
+        "load_end": None,  # Windows has no load average
     }
     row = suite.Row("3", "a | b", "1 s", "2 s", "2x", "peer/ours >= 10", "MISS (5.0x off)")
     section = suite.Section("long_run", "3. Long run", [row], ["a detail", "| x |"], {}, 1.0)
@@ -196,5 +197,55 @@ def test_markdown_has_machine_table_and_details(suite, run):
     assert "| # | benchmark | ours | peer | ratio | target | result |" in text
     assert "| 3 | a / b | 1 s | 2 s | 2x | peer/ours >= 10 | MISS (5.0x off) |" in text
     assert "OPENBLAS_NUM_THREADS=1" in text and "a CPU" in text
-    assert "2.00, 2.00, 2.00" in text and "SMOKE run" in text
+    assert "1.00, 1.00, 1.00; at end: unknown" in text and "SMOKE run" in text
     assert "a detail" in text and "| x |" in text
+
+
+def test_machine_description_without_proc_load_average_or_affinity(suite, monkeypatch):
+    """macOS and Windows have no /proc/cpuinfo, Windows no load average, neither an affinity
+    call: the description says what it can and "unknown" for the rest, and never fails."""
+    import harness
+
+    monkeypatch.setattr(harness, "CPUINFO", Path("/proc/no-such-cpuinfo"))
+    monkeypatch.delattr(os, "getloadavg")
+    monkeypatch.delattr(os, "sched_getaffinity", raising=False)
+    monkeypatch.setattr(harness.platform, "processor", lambda: "Intel64 Family 6 Model 85")
+    machine = harness.machine_description()
+    assert machine["cpu"] == "Intel64 Family 6 Model 85"
+    assert machine["load_start"] is None and machine["cores_available"] is None
+    assert harness.load_text(machine["load_start"]) == "unknown"
+    monkeypatch.setattr(harness.platform, "processor", lambda: "")  # Linux says nothing there
+    assert harness.cpu_name() == "unknown"
+
+
+def test_machine_description_reads_the_model_name_where_proc_has_it(suite, monkeypatch,
+                                                                      tmp_path):
+    import harness
+
+    cpuinfo = tmp_path / "cpuinfo"
+    cpuinfo.write_text("processor\t: 0\nmodel name\t: A Test CPU @ 2.0GHz\n", encoding="utf-8")
+    monkeypatch.setattr(harness, "CPUINFO", cpuinfo)
+    monkeypatch.setattr(harness.platform, "processor", lambda: "not this")
+    assert harness.cpu_name() == "A Test CPU @ 2.0GHz"
+    assert harness.load_text((0.5, 1.0, 1.25)) == "0.50, 1.00, 1.25"
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler")
+def test_c_loop_without_sincos_calls_sin_and_cos_as_the_kernels_do_there(suite, tmp_path,
+                                                                         monkeypatch):
+    """macOS and Windows (emulated): the C library has no sincos, the kernels call sin and cos
+    without the shift near pi, and so does the C yardstick."""
+    from pendulum_lab.codegen import lowlevel
+
+    dp = pl.double_pendulum()
+    with_sincos = suite.c_yardstick.c_source(dp.chain)
+    monkeypatch.setattr(lowlevel, "HAVE_SINCOS", False)
+    monkeypatch.setattr(lowlevel, "SHIFT_NEAR_PI", False)
+    source = suite.c_yardstick.c_source(dp.chain)
+    assert "sincos(" in with_sincos and "sincos(" not in source.replace("paired_sincos(", "")
+    assert "*s = sin(x);" in source and "*c = cos(x);" in source
+    loop = suite.c_yardstick.build(dp, tmp_path)  # it compiles, and it moves the same way
+    theta0, omega0 = np.array([2.0, 2.5]), np.zeros(2)
+    run = loop.single(theta0, dp.momenta(theta0, omega0), 100, 0.01)
+    traj = pl.simulate(dp, theta0, omega0, t_end=1.0, dt=0.01, method="rk4")
+    assert np.max(np.abs(run.theta - traj.theta[-1])) <= 1e-9

@@ -104,7 +104,10 @@ def browser_unavailable_reason() -> str | None:
     except ImportError as exc:
         return f"Playwright for Python is not importable ({exc}); pip install playwright"
     if chromium_path() is None:
-        return "Chromium not found at /usr/bin/chromium nor on PATH; apt-get install -y chromium"
+        # Debian's Chromium is what these tests are run with; elsewhere say so, not apt-get
+        hint = ("apt-get install -y chromium" if sys.platform.startswith("linux")
+                else "put a Chromium executable named `chromium` on PATH")
+        return f"Chromium not found at {CHROMIUM} nor on PATH; {hint}"
     return None
 
 
@@ -146,11 +149,23 @@ def _free_port() -> int:
 
 
 def _descendants(pid: int) -> list[int]:
-    """Every process below ``pid`` (kernels run in sessions of their own, not our group)."""
+    """Every process below ``pid`` (kernels run in sessions of their own, not our group).
+
+    psutil (installed with IPython and ipykernel) asks each system its own way; without it,
+    Linux's ``/proc``; elsewhere none are found, and only the server itself is stopped.
+    """
+    try:
+        import psutil
+    except ImportError:
+        psutil = None
+    if psutil is not None:
+        with contextlib.suppress(psutil.Error):
+            return [child.pid for child in psutil.Process(pid).children(recursive=True)]
+        return []
     children: dict[int, list[int]] = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         with contextlib.suppress(OSError, ValueError, IndexError):
-            text = stat.read_text()
+            text = stat.read_text(encoding="utf-8", errors="replace")
             ppid = int(text.rsplit(")", 1)[1].split()[1])
             children.setdefault(ppid, []).append(int(stat.parent.name))
     found, todo = [], [pid]
@@ -159,6 +174,50 @@ def _descendants(pid: int) -> list[int]:
             found.append(child)
             todo.append(child)
     return found
+
+
+def new_process_group() -> dict:
+    """``Popen`` arguments that start a process in a group of its own, on any system."""
+    if sys.platform == "win32":
+        return {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
+    return {"start_new_session": True}
+
+
+def _end_group(process: subprocess.Popen, force: bool) -> None:
+    """Terminate (or with ``force`` kill) ``process`` and its group where groups can be
+    signalled (POSIX's ``killpg``), else the process alone (Windows)."""
+    with contextlib.suppress(ProcessLookupError, PermissionError, OSError):
+        if hasattr(os, "killpg"):
+            os.killpg(process.pid, signal.SIGKILL if force else signal.SIGTERM)
+        elif force:
+            process.kill()
+        else:
+            process.terminate()
+
+
+def _kill(pid: int) -> None:
+    """Kill one process by its id (Windows has no SIGKILL; its os.kill terminates)."""
+    with contextlib.suppress(ProcessLookupError, PermissionError, OSError):
+        os.kill(pid, getattr(signal, "SIGKILL", signal.SIGTERM))
+
+
+def stop_process_tree(process: subprocess.Popen, polite=None, waits=(15, 10, 5)) -> None:
+    """Stop ``process`` and everything it started: ``polite()`` first (for instance a
+    shutdown request), then terminate, then kill, each followed by a wait; last, every
+    descendant found before the first step is killed (kernels start sessions of their own)."""
+    if process.poll() is None:
+        spawned = _descendants(process.pid)
+        if polite is not None:
+            polite()
+        for step, wait in zip((None, False, True), waits, strict=True):
+            if step is not None:
+                _end_group(process, force=step)
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                process.wait(timeout=wait)
+                break
+        for pid in spawned:
+            _kill(pid)
+    process.wait(timeout=5)
 
 
 @dataclass
@@ -177,7 +236,7 @@ class LabServer:
 
     def log_tail(self, chars: int = 3000) -> str:
         with contextlib.suppress(OSError):
-            return self.log.read_text(errors="replace")[-chars:]
+            return self.log.read_text(encoding="utf-8", errors="replace")[-chars:]
         return ""
 
     def shutdown_kernels_of(self, path: str) -> None:
@@ -187,23 +246,12 @@ class LabServer:
                     self.api("DELETE", f"/api/sessions/{session['id']}")
 
     def stop(self) -> None:
-        proc = self.process
-        if proc.poll() is None:
-            spawned = _descendants(proc.pid)
+        def shutdown_request():
             # Polite first: the server shuts its kernels down and exits.
             with contextlib.suppress(OSError, urllib.error.URLError, ValueError):
                 self.api("POST", "/api/shutdown", timeout=5)
-            for sig, wait in ((None, 15), (signal.SIGTERM, 10), (signal.SIGKILL, 5)):
-                if sig is not None:
-                    with contextlib.suppress(ProcessLookupError, PermissionError):
-                        os.killpg(proc.pid, sig)
-                with contextlib.suppress(subprocess.TimeoutExpired):
-                    proc.wait(timeout=wait)
-                    break
-            for pid in spawned:
-                with contextlib.suppress(ProcessLookupError, PermissionError):
-                    os.kill(pid, signal.SIGKILL)
-        proc.wait(timeout=5)
+
+        stop_process_tree(self.process, shutdown_request)
 
 
 def start_lab(workdir: Path, notebooks: Path) -> LabServer:
@@ -213,7 +261,7 @@ def start_lab(workdir: Path, notebooks: Path) -> LabServer:
     for plugin, values in LAB_SETTINGS.items():
         target = settings / f"{plugin}.jupyterlab-settings"
         target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(json.dumps(values))
+        target.write_text(json.dumps(values), encoding="utf-8")
     env = dict(os.environ)
     for var, sub in (
         ("JUPYTER_CONFIG_DIR", "jupyter-config"),
@@ -255,7 +303,7 @@ def start_lab(workdir: Path, notebooks: Path) -> LabServer:
             stdin=subprocess.DEVNULL,
             stdout=sink,
             stderr=subprocess.STDOUT,
-            start_new_session=True,
+            **new_process_group(),
         )
     server = LabServer(url=f"http://127.0.0.1:{port}", root=root, log=log, process=process)
     deadline = time.monotonic() + 90
@@ -714,7 +762,7 @@ def record_timing(run: NotebookRun) -> None:
     data: dict = {}
     if TIMINGS.exists():
         with contextlib.suppress(ValueError, OSError):
-            data = json.loads(TIMINGS.read_text())
+            data = json.loads(TIMINGS.read_text(encoding="utf-8"))
     notebooks = data.setdefault("notebooks", {})
     screenshot = None
     if run.screenshot is not None:
@@ -728,4 +776,4 @@ def record_timing(run: NotebookRun) -> None:
         "notebook_dir": str(notebook_dir()),
         "recorded_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    TIMINGS.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+    TIMINGS.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n", encoding="utf-8")

@@ -3,7 +3,9 @@
 The vectorizable sine and cosine agree with the C library to two units in the last place within
 their range (and fail beyond it); the views without a reference count see and change the
 memory they point into; the stack buffer holds what is written to it; ``sincos`` gives the C
-library's sine and cosine, and near +-pi values within one unit in the last place. No test
+library's sine and cosine, and near +-pi (where it shifts by pi) values within 1.5 units in the
+last place, a bound reached to 1.32 and not to 1 (``tests/codegen/test_sincos_platforms.py``
+has the systems without the shift). No test
 reads machine code or LLVM text: what the attributes buy is speed, which the benchmarks
 measure.
 """
@@ -116,16 +118,37 @@ def _moved_by_pi(xs):
     return (size >= lowlevel.SHIFT_FROM) & (size <= lowlevel.SHIFT_TO)
 
 
-def _worst_ulps_exact(xs, values):
-    """Largest difference of ``values`` (rows sin, cos) from the exact sine and cosine of
-    ``xs``, in units of the last place of the exact values."""
-    worst = 0.0
+def _ulps_from_exact(xs, values):
+    """``(sine, cosine)``: the largest differences of ``values`` (rows sin, cos) from the
+    exact sine and cosine of ``xs`` (mpmath), in units of the last place of the exact values
+    (not rounded first: the difference from the rounded value is a whole number of units)."""
+    worst = [0.0, 0.0]
     with mpmath.workprec(200):
-        for x, (sine, cosine) in zip(xs, values):
-            for got, exact in ((sine, mpmath.sin(x)), (cosine, mpmath.cos(x))):
-                exact = float(exact)
-                worst = max(worst, abs(got - exact) / np.spacing(abs(exact)))
-    return worst
+        for x, row in zip(xs, values):
+            for column, (got, exact) in enumerate(zip(row, (mpmath.sin(x), mpmath.cos(x)))):
+                unit = np.spacing(abs(float(exact)))
+                worst[column] = max(worst[column], float(abs(mpmath.mpf(got) - exact)) / unit)
+    return tuple(worst)
+
+
+def _worst_ulps_exact(xs, values):
+    """Largest difference of ``values`` from the exact sine and cosine, in ulps."""
+    return max(_ulps_from_exact(xs, values))
+
+
+@numba.njit
+def _paired_shifted(xs):
+    """:func:`lowlevel.sincos`'s shifted branch, whatever the C library (the shift is taken
+    only where :data:`lowlevel.SHIFT_NEAR_PI`)."""
+    out = np.empty((xs.size, 2))
+    for i in range(xs.size):
+        x = xs[i]
+        if lowlevel.SHIFT_FROM <= abs(x) <= lowlevel.SHIFT_TO:
+            y = (x - math.copysign(lowlevel.PI_1, x)) - math.copysign(lowlevel.PI_2, x)
+            out[i, 0], out[i, 1] = -math.sin(y), -math.cos(y)
+        else:
+            out[i, 0], out[i, 1] = math.sin(x), math.cos(x)
+    return out
 
 
 def test_sincos_gives_the_c_librarys_sine_and_cosine_away_from_pi():
@@ -133,21 +156,36 @@ def test_sincos_gives_the_c_librarys_sine_and_cosine_away_from_pi():
     kept = xs[~_moved_by_pi(xs)]
     assert kept.size > 1900
     np.testing.assert_array_equal(_paired(kept), _c_library(kept))
+    # and where it does not shift (macOS, Windows), everywhere
+    if not lowlevel.SHIFT_NEAR_PI:
+        np.testing.assert_array_equal(_paired(xs), _c_library(xs))
 
 
-def test_sincos_near_pi_is_within_one_unit_in_the_last_place():
-    # the range moved by pi, its ends, and the angles next to +-pi where the sine is tiny
-    near = np.concatenate([RNG.uniform(2.4, 4.0, 5000), -RNG.uniform(2.4, 4.0, 5000),
-                           [lowlevel.SHIFT_FROM, lowlevel.SHIFT_TO, np.pi, -np.pi]])
-    near = np.concatenate([near, np.nextafter(np.pi, [0.0, 4.0]),
-                           np.pi + np.arange(-50, 51) * 1e-14])
-    got = _paired(near)
-    assert _worst_ulps_exact(near, got) <= 1.0
+def test_sincos_near_pi_is_within_one_and_a_half_units_in_the_last_place():
+    # the range moved by pi, its ends, the angles next to +-pi where the sine is tiny, and
+    # where x - pi is next to a power of two: its rounding by half a unit of x - pi is then a
+    # whole unit of the sine below that power (issue: 1.32 at x = 3.0165786637849092)
+    rng = np.random.default_rng(20261207)
+    powers = np.pi + np.concatenate([2.0 ** -np.arange(1, 53), -(2.0 ** -np.arange(1, 53))])
+    near = np.concatenate([rng.uniform(2.4, 4.0, 5000), -rng.uniform(2.4, 4.0, 5000),
+                           [lowlevel.SHIFT_FROM, lowlevel.SHIFT_TO, np.pi, -np.pi],
+                           np.nextafter(np.pi, [0.0, 4.0]), np.pi + np.arange(-50, 51) * 1e-14,
+                           *(powers + k * np.spacing(powers) for k in range(-6, 7)),
+                           [3.0165786637849092]])
+    got = _paired_shifted(near)
+    if lowlevel.SHIFT_NEAR_PI:
+        np.testing.assert_array_equal(_paired(near), got)
+    sine, cosine = _ulps_from_exact(near, got)
+    assert sine <= lowlevel.SHIFTED_ULPS and cosine <= 1.0
+    # the bound is what it says: one unit is exceeded, so "within one unit" would be false
+    assert sine > 1.25
+    # the C library's own, unshifted values stay within its (near) correct rounding
+    assert max(_ulps_from_exact(near, _c_library(near))) < 0.55
     # the shift is taken there: some last bits differ from the C library's own reduction
     moved = _moved_by_pi(near)
     assert not np.array_equal(got[moved], _c_library(near[moved]))
     # odd sine, even cosine
-    np.testing.assert_array_equal(_paired(-near), got * [-1.0, 1.0])
+    np.testing.assert_array_equal(_paired_shifted(-near), got * [-1.0, 1.0])
 
 
 def test_pi_in_one_part_would_lose_the_sine_next_to_pi():

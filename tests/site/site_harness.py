@@ -65,7 +65,7 @@ def site_unavailable_reason() -> str | None:
         try:
             __import__(module)
         except ImportError as exc:
-            return f"{module} is not importable ({exc}); pip install -e '.[docs]'"
+            return f'{module} is not importable ({exc}); pip install -e ".[docs]"'
     try:
         import playwright.sync_api  # noqa: F401
     except ImportError as exc:
@@ -523,4 +523,4 @@ def summary(reports: list[PageReport]) -> dict:
 
 def write_json(path: Path, data) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1) + "\n")
+    path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")

@@ -217,7 +217,9 @@ def run_lab(args) -> int:
     """The ``lab`` subcommand."""
     if importlib.util.find_spec("jupyterlab") is None:
         print(
-            "JupyterLab is not installed. Install it with:  pip install 'pendulum_lab[lab]'",
+            # double quotes: the same command in PowerShell, cmd and a POSIX shell
+            "JupyterLab is not installed. Install it with:  "
+            'python -m pip install "pendulum_lab[lab]"',
             file=sys.stderr,
         )
         return 1

@@ -189,10 +189,12 @@ def first_use_cost(n: int = 2, method="glrk4") -> FirstUseCost:
     name = get_method(method).name
     firsts, seconds = [], []
     with tempfile.TemporaryDirectory() as kernels, tempfile.TemporaryDirectory() as machine_code:
-        env = os.environ | {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": machine_code}
+        env = os.environ | {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": machine_code,
+                            "PYTHONIOENCODING": "utf-8"}
         for _ in range(2):
             done = subprocess.run([sys.executable, "-c", _FIRST_USE, str(n), name], env=env,
-                                  capture_output=True, text=True, check=False)
+                                  capture_output=True, text=True, encoding="utf-8",
+                                  errors="replace", check=False)
             if done.returncode != 0:
                 raise RuntimeError(f"the measuring process failed: {done.stderr.strip()[-500:]}")
             first, second = json.loads(done.stdout.strip().splitlines()[-1])

@@ -16,6 +16,7 @@ that starts it, with a progress bar).
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -189,8 +190,12 @@ class BackgroundWarmUp:
         self.returncode: int | None = None
         self._on_progress = on_progress
         self._errors: list[str] = []
+        # the child writes UTF-8 and this side reads it, whatever the locale (Windows' is
+        # often cp1252)
         self._process = subprocess.Popen(command, stdout=subprocess.PIPE,
-                                         stderr=subprocess.PIPE, text=True, bufsize=1)
+                                         stderr=subprocess.PIPE, text=True, encoding="utf-8",
+                                         errors="replace", bufsize=1,
+                                         env=os.environ | {"PYTHONIOENCODING": "utf-8"})
         self._threads = [threading.Thread(target=self._read, daemon=True,
                                           name="pendulum_lab warm-up"),
                          threading.Thread(target=self._read_errors, daemon=True,

@@ -17,10 +17,11 @@ llvmlite 0.50). Its tests pass with every minor release of Numba from 0.61 (llvm
   non-negative floats as integers, which LLVM vectorizes and a floating-point maximum it would
   not (105 against 51 ns on 32 components, the rule deciding the same).
 * **One ``sincos`` call** (:func:`sincos`): the sine and cosine of one angle from one call of
-  the C library, sharing the argument reduction as a C compiler would; an angle near ``+-pi``
-  is shifted by ``pi`` first, into the C library's fast branch (the Kapitza pendulum held
-  inverted: its cost per field evaluation 1.39-1.45 instead of 1.49-1.51 times the driven
-  pendulum's, medians of benchmark item 15).
+  the C library, sharing the argument reduction as a C compiler would; where the C library is
+  glibc, an angle near ``+-pi`` is shifted by ``pi`` first, into its fast branch (the Kapitza
+  pendulum held inverted: its cost per field evaluation 1.39-1.45 instead of 1.49-1.51 times
+  the driven pendulum's, medians of benchmark item 15). Which C library that is depends on the
+  operating system (:data:`HAVE_SINCOS`, ``docs/portability.md``).
 * **Sines and cosines the compiler can vectorize** (:func:`lane_sin`, :func:`lane_cos`,
   :func:`lane_sincos`): the stage kernel of one or two links evaluates the field at 8 stages in
   one SIMD loop, which a call of the C library's ``sin`` would stop (LLVM cannot vectorize an
@@ -42,8 +43,8 @@ Tests check what each device does (results, bits, aliasing), never the machine c
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import math
+import sys
 
 import llvmlite.ir as llvm_ir
 import numba
@@ -54,6 +55,9 @@ __all__ = [
     "HAVE_SINCOS",
     "LANE_GROUP",
     "LIMIT",
+    "SHIFTED_ULPS",
+    "SHIFT_NEAR_PI",
+    "c_library_has_sincos",
     "align_stack",
     "bits_float",
     "block",
@@ -216,15 +220,40 @@ def stack_floats(typingctx, count):
 
 
 # ------------------------------------------------------------------------- sine and cosine
-def _c_library_has_sincos() -> bool:
+def c_library_has_sincos(platform: str | None = None) -> bool:
+    """Whether compiled kernels can call the C library's ``sincos`` on this operating system.
+
+    ``sincos`` is a GNU extension, not standard C. Numba's JIT links a kernel's call of it
+    against the symbols already loaded in the process (llvmlite searches the process, as
+    ``dlsym`` does), so the test is whether the process has that symbol; a kernel that called
+    a missing one would fail to link on its first call, long after the import.
+
+    * Linux: glibc's (and musl's) libm has it, and every CPython process has libm loaded:
+      ``ctypes.CDLL(None)`` opens the process's own symbols, the ones the JIT sees.
+    * macOS: libSystem exports no ``sincos`` (its paired call is ``__sincos_stret``, returning
+      a structure); the kernels call ``sin`` and ``cos`` separately, which LLVM's back end for
+      Apple targets itself turns into one ``__sincos_stret`` call (per LLVM's code-generation
+      tests; not measured here).
+    * Windows: the Universal C Runtime has no ``sincos``, ``find_library("m")`` is None there
+      and ``ctypes.CDLL(None)`` raises TypeError; the kernels call ``sin`` and ``cos``.
+
+    Never raises: any failure to look means False, the separate calls, which are right on
+    every system. ``platform`` defaults to ``sys.platform``.
+    """
+    platform = sys.platform if platform is None else platform
+    if platform.startswith(("win32", "cygwin", "darwin")):
+        return False
     try:
-        return hasattr(ctypes.CDLL(ctypes.util.find_library("m")), "sincos")
-    except OSError:
+        process = ctypes.CDLL(None)
+        return hasattr(process, "sincos")
+    except (OSError, TypeError, AttributeError, ValueError):
         return False
 
 
-#: Whether the C math library has ``sincos`` (glibc does; it is not standard C).
-HAVE_SINCOS = _c_library_has_sincos()
+#: Whether the kernels call the C library's ``sincos`` (:func:`c_library_has_sincos`: on Linux
+#: yes, on macOS and Windows no). It also decides the shift near ``+-pi`` (:func:`sincos`),
+#: which was measured against glibc's branches only.
+HAVE_SINCOS = c_library_has_sincos()
 
 
 @intrinsic
@@ -235,8 +264,12 @@ def _c_sincos(typingctx, x):
     (the mass matrix has ``cos(theta_i - theta_j)``, the forces
     ``sin(theta_i - theta_j)``); one call shares the argument reduction, as a C
     compiler arranges by itself (LLVM, behind Numba, does not). glibc's
-    ``sincos`` returns exactly ``sin(x)`` and ``cos(x)``. Without ``sincos`` in
-    the C library, two separate calls.
+    ``sincos`` returns exactly ``sin(x)`` and ``cos(x)``. Without :data:`HAVE_SINCOS`
+    (macOS, Windows), ``llvm.sin`` and ``llvm.cos``: LLVM's back end turns them into the
+    system's paired call where its table of C library functions lists one (glibc's
+    ``sincos``: kernels compiled here with :data:`HAVE_SINCOS` forced off still call it;
+    Apple's ``__sincos_stret``) and into two calls elsewhere, so it never names a symbol the
+    process lacks.
     """
     if not isinstance(x, types.Float):
         return None
@@ -270,6 +303,15 @@ PI_1, PI_2 = 3.141592653589793, 1.2246467991473532e-16
 #: ``sincos`` shifts ``|x|`` in this range by ``pi``: then ``|x - pi| < 0.855469``, glibc's
 #: first branch, which needs no reduction.
 SHIFT_FROM, SHIFT_TO = 2.426265, 3.997
+#: Whether :func:`sincos` shifts at all: only with the C library whose branches were measured
+#: (glibc, where :data:`HAVE_SINCOS`); elsewhere it gives the C library's own values throughout.
+SHIFT_NEAR_PI = HAVE_SINCOS
+#: The most the shifted values can differ from the exact sine and cosine, in units in the last
+#: place: rounding ``x - pi`` costs up to half a unit of the argument, which is a whole unit of
+#: a sine just below a power of two (``x - pi`` just beyond one), and the C library's own
+#: rounding adds half a unit (measured against mpmath: 1.32, at ``x = 3.0165786637849092``,
+#: ``tests/codegen/test_lowlevel.py``).
+SHIFTED_ULPS = 1.5
 
 
 @numba.njit(inline="always")
@@ -277,12 +319,13 @@ def sincos(x):
     """``(sin(x), cos(x))``: :func:`_c_sincos`, at ``x - pi`` where ``|x|`` is near ``pi``.
 
     There ``sin(x) = -sin(x - pi)`` and ``cos(x) = -cos(x - pi)``, and ``x - PI_1`` is exact
-    (Sterbenz), so the shifted argument is ``x - pi`` rounded once: within one unit in the
-    last place of the exact values (``tests/codegen/test_lowlevel.py``), and 21 ns instead of
-    28 ns when each call waits for the last (docs/design/system-protocol.md). Elsewhere it is
-    exactly the C library's ``sincos``.
+    (Sterbenz), so the shifted argument is ``x - pi`` rounded once: the values are within
+    :data:`SHIFTED_ULPS` (1.5) units in the last place of the exact ones (1.32 measured), not
+    always the C library's to the bit, and take 21 ns instead of 28 ns when each call waits for
+    the last (docs/design/system-protocol.md). Elsewhere, and everywhere when
+    :data:`SHIFT_NEAR_PI` is false (macOS, Windows), they are exactly the C library's.
     """
-    if SHIFT_FROM <= abs(x) <= SHIFT_TO:
+    if SHIFT_NEAR_PI and SHIFT_FROM <= abs(x) <= SHIFT_TO:
         sine, cosine = _c_sincos((x - math.copysign(PI_1, x)) - math.copysign(PI_2, x))
         return -sine, -cosine
     return _c_sincos(x)
