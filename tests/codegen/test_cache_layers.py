@@ -225,9 +225,11 @@ def test_an_unwritable_cache_folder_compiles_in_memory_and_says_where(layers, mo
     (layers / "a_file").write_text("not a folder")
     folder = layers / "a_file" / "cache"  # cannot be made, whoever runs the test
     monkeypatch.setenv(CACHE_VARIABLE, str(folder))
-    with pytest.warns(KernelCacheWarning) as caught:
+    events = []
+    with pytest.warns(KernelCacheWarning) as caught, compile_status.listen(events.append):
         module, path = load_generated("layer_test", new_source())
     assert module.square(4.0) == 16.0 and path is None
+    assert events[-1].message.endswith("for this session only")
     (warning,) = [w for w in caught if issubclass(w.category, KernelCacheWarning)]
     text = str(warning.message)
     assert str(folder / "kernels") in text and CACHE_VARIABLE in text and "\n" not in text
@@ -578,3 +580,24 @@ def test_warmup_cache_compiles_into_the_given_folder(layers, monkeypatch, capsys
                      "none"]) == 1
     err = capsys.readouterr().err
     assert str(layers / "a_file" / "c") in err and "--cache" in err
+
+
+def test_a_run_that_loaded_its_kernels_says_it_loaded_them():
+    # issue 43, item 23: a kernel loaded from the cache was reported as "after compiling"
+    import numpy as np
+
+    import pendulum_lab as pl
+    from pendulum_lab.widgets.instrument import Instrument
+
+    def summary(compiled: bool) -> str:
+        trajectory = types.SimpleNamespace(
+            energy_error=np.zeros(3), energy=np.ones(3), t=np.arange(3.0), dt=0.1,
+            method=types.SimpleNamespace(name="rk4"), wall_time=0.01, compile_time=0.4,
+            compiled=compiled)
+        fake = types.SimpleNamespace(trajectory=trajectory, model=pl.simple_pendulum())
+        return Instrument.summary(fake)
+
+    assert "after loading its compiled kernels from the disk cache in 0.4 s" in summary(False)
+    assert "compiling" not in summary(False)
+    # negative control: a run that compiled says so
+    assert "after compiling for 0.4 s, once per machine" in summary(True)

@@ -159,10 +159,11 @@ _warned: set[str] = set()
 
 
 def _warn_once(text: str) -> None:
-    """A :class:`KernelCacheWarning`, once per text and process."""
+    """A :class:`KernelCacheWarning`, once per text and process, shown as one line (it is
+    attributed to the package, not to a line of code that would be printed below it)."""
     if text not in _warned:
         _warned.add(text)
-        warnings.warn(text, KernelCacheWarning, stacklevel=3)
+        warnings.warn_explicit(text, KernelCacheWarning, filename=PACKAGE, lineno=0)
 
 
 @functools.lru_cache(maxsize=64)
@@ -194,12 +195,12 @@ def cache_layers() -> CacheLayers:
         if folder.is_dir():
             read.append(folder)
         else:
-            _warn_once(f"pendulum_lab: the shared kernel cache {folder} (from {SHARED_VARIABLE}) "
+            _warn_once(f"the shared kernel cache {folder} (from {SHARED_VARIABLE}) "
                        "is not a folder; it is ignored")
     user = cache_dir()
     write = None
     if user is None:
-        _warn_once("pendulum_lab: there is no home folder for the kernel cache; kernels are "
+        _warn_once("there is no home folder for the kernel cache; kernels are "
                    f"compiled in memory for this session. Set {CACHE_VARIABLE} to a writable "
                    "folder to keep them.")
     elif user not in read:  # (the user's cache named as a shared layer is read-only too)
@@ -210,7 +211,7 @@ def cache_layers() -> CacheLayers:
         else:
             if user.is_dir():
                 read.append(user)  # read what it holds
-            _warn_once(f"pendulum_lab: cannot write the kernel cache {user} ({reason}); kernels "
+            _warn_once(f"cannot write the kernel cache {user} ({reason}); kernels "
                        f"missing from it are compiled in memory for this session. Set "
                        f"{CACHE_VARIABLE} to a writable folder to keep them.")
     return CacheLayers(tuple(read), write)
@@ -367,7 +368,7 @@ def _write_atomically(path: Path, text: str) -> None:
 def _set_aside(path: Path, reason: str, writable: bool) -> None:
     """Report a damaged cache file; rename it ``<name>.damaged`` if its layer is writable."""
     if not writable:
-        _warn_once(f"pendulum_lab: damaged kernel cache file {path} ({reason}) in a read-only "
+        _warn_once(f"damaged kernel cache file {path} ({reason}) in a read-only "
                    "layer; skipped (rebuild that layer with `pendulum-lab warmup --cache`)")
         return
     aside = path.with_name(path.name + ".damaged")
@@ -376,10 +377,10 @@ def _set_aside(path: Path, reason: str, writable: bool) -> None:
     except FileNotFoundError:
         return  # another process set it aside first
     except OSError as err:
-        _warn_once(f"pendulum_lab: damaged kernel cache file {path} ({reason}) could not be "
+        _warn_once(f"damaged kernel cache file {path} ({reason}) could not be "
                    f"set aside ({err.strerror}); delete it")
         return
-    _warn_once(f"pendulum_lab: damaged kernel cache file {path} ({reason}); set aside as "
+    _warn_once(f"damaged kernel cache file {path} ({reason}); set aside as "
                f"{aside.name}, building it again")
 
 
@@ -575,7 +576,7 @@ class KernelCache(numba_caching.Cache):
                     _set_aside(index, str(damage), True)
                 numba_caching.IndexDataCacheFile(str(folder), base, stamp).save(key, payload)
         except OSError as err:  # full, or no longer writable: the kernel stays in memory
-            _warn_once(f"pendulum_lab: cannot save a compiled kernel into {folder} "
+            _warn_once(f"cannot save a compiled kernel into {folder} "
                        f"({err.strerror or err}); it is compiled in memory for this session. "
                        f"Set {CACHE_VARIABLE} to a writable folder to keep it.")
 
@@ -737,7 +738,8 @@ def load_generated(stem: str, source: str, inject: dict | None = None,
         path = _find_source(shared, filename, source, None)
         expected_load = path is not None or (
             layers.write is not None and (layers.write / filename).exists())
-        with compiling(what or f"the generated module {stem}", loading=expected_load):
+        with compiling(what or f"the generated module {stem}", loading=expected_load,
+                       kept=layers.write is not None):
             if layers.write is None:
                 guard = contextlib.nullcontext()
             else:  # and one process
@@ -757,7 +759,7 @@ def _write_or_none(path: Path, source: str) -> Path | None:
     try:
         _write_atomically(path, source)
     except OSError as err:
-        _warn_once(f"pendulum_lab: cannot write {path} ({err.strerror or err}); kernels are "
+        _warn_once(f"cannot write {path} ({err.strerror or err}); kernels are "
                    f"compiled in memory for this session. Set {CACHE_VARIABLE} to a writable "
                    "folder to keep them.")
         return None

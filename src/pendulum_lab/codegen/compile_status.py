@@ -86,12 +86,16 @@ class Compilation:
     state : {"started", "finished", "failed"}
     seconds : float
         Seconds since it started (0 when ``state`` is ``"started"``).
+    kept : bool
+        Whether what is compiled is saved to the disk cache (False when no kernel cache can
+        be written: it is then compiled for this session only).
     """
 
     what: str
     loading: bool | None
     state: str
     seconds: float = 0.0
+    kept: bool = True
 
     @property
     def message(self) -> str:
@@ -110,11 +114,15 @@ class Compilation:
                 return f"loading {what} from the disk cache…"
             if self.loading is None:
                 return f"preparing {what} (compiled once per machine, then loaded from disk)…"
+            if not self.kept:
+                return f"compiling {what} for this session (the kernel cache cannot be written)…"
             return f"compiling {what}, once per machine…"
         if self.state == "failed":
             return f"compiling {what} failed after {seconds:.1f} s"
         if self.loading:
             return f"loaded {what} from the disk cache in {seconds:.1f} s"
+        if not self.kept:
+            return f"compiled {what} in {seconds:.1f} s, for this session only"
         return (f"compiled {what} in {seconds:.1f} s (once per machine: from now on it loads "
                 "from the disk cache)")
 
@@ -183,7 +191,7 @@ def _tell(listeners, event: Compilation) -> None:
 
 
 @contextmanager
-def compiling(what: str, *, loading: bool | None = None):
+def compiling(what: str, *, loading: bool | None = None, kept: bool = True):
     """Announce the compilation (or load from the disk cache) that the block does.
 
     Parameters
@@ -192,6 +200,8 @@ def compiling(what: str, *, loading: bool | None = None):
         What is compiled, for people: "glrk4 for the double pendulum".
     loading : bool or None
         Whether the machine code is expected in the disk cache (see :class:`Compilation`).
+    kept : bool
+        Whether it is saved to the disk cache (see :class:`Compilation`).
 
     Inside another compilation of the same thread the block is part of that one: it neither
     speaks nor counts separately.
@@ -207,7 +217,7 @@ def compiling(what: str, *, loading: bool | None = None):
             state.depth -= 1
         return
     listeners = list(state.listeners)
-    started = Compilation(what, loading, "started")
+    started = Compilation(what, loading, "started", kept=kept)
     note = None if listeners or _notes_off() else _Note(started)
     _tell(listeners, started)
     state.depth = 1
@@ -225,7 +235,7 @@ def compiling(what: str, *, loading: bool | None = None):
         outcome = False if compiled else (True if loaded else loading)
         if not outcome:
             state.compiled_seconds += seconds
-        ended = Compilation(what, outcome, "finished" if ok else "failed", seconds)
+        ended = Compilation(what, outcome, "finished" if ok else "failed", seconds, kept)
         if note is not None:
             note.close(ended)
         _tell(listeners, ended)
