@@ -60,7 +60,8 @@ def _fresh_process(code: str, env: dict | None = None) -> Sample:
 def _cold_process(code: str) -> Sample:
     """A fresh process whose kernel cache and Numba cache are empty temporary folders."""
     with tempfile.TemporaryDirectory() as kernels, tempfile.TemporaryDirectory() as numba_dir:
-        env = os.environ | {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": numba_dir}
+        env = {k: v for k, v in os.environ.items() if k != "PENDULUM_LAB_SHARED_CACHE"}
+        env |= {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": numba_dir}
         return _fresh_process(code, env)
 
 
