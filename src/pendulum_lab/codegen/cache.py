@@ -84,6 +84,7 @@ import numba
 import numpy as np
 from numba.core import caching as numba_caching
 from numba.core import compiler as numba_compiler
+from numba.core import dispatcher as numba_dispatcher
 
 from . import compile_status
 from .compile_status import compiling
@@ -628,6 +629,8 @@ def cached_njit(signature=None, **options):
 
     def decorate(function):
         dispatcher = numba.njit(**options)(function)
+        if not isinstance(dispatcher, numba_dispatcher.Dispatcher):
+            return dispatcher  # NUMBA_DISABLE_JIT=1: the plain Python function
         # what ``Dispatcher.enable_caching`` sets, with the layered cache instead of Numba's
         dispatcher._cache = KernelCache(function)
         if signature is not None:
