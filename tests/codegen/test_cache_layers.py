@@ -372,14 +372,22 @@ _IMPORT_AND_LOAD = textwrap.dedent("""\
 
 def test_import_pendulum_lab_survives_a_damaged_cache(layers, monkeypatch):
     source, folder, stem = _warm_user_cache(monkeypatch, layers)
-    for path in (folder / "__pycache__").glob("*.nbi"):
-        path.write_bytes(path.read_bytes()[:20])
-    env = {**os.environ, CACHE_VARIABLE: str(layers / "user")}
+    index = _index(folder, stem)  # triple's index truncated
+    index.write_bytes(index.read_bytes()[:20])
+    (data,) = (folder / "__pycache__").glob(f"{stem}.square-*.nbc")  # square's data garbage
+    data.write_bytes(b"garbage" * 20)
+    module = folder / f"{stem}.py"  # and the module cut short
+    module.write_text(module.read_text()[:60])
+    env = {**os.environ, CACHE_VARIABLE: str(layers / "user"),
+           compile_status.NOTES_VARIABLE: "off"}
     done = subprocess.run([sys.executable, "-c", _IMPORT_AND_LOAD, source], env=env,
                           capture_output=True, text=True, timeout=300, check=False)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip() == "6.0"
-    assert "damaged kernel cache file" in done.stderr and stem in done.stderr
+    for path in (index, data, module):
+        assert f"damaged kernel cache file {path}" in done.stderr
+        assert path.with_name(path.name + ".damaged").exists()
+    assert done.stderr.count("KernelCacheWarning") == 3  # one line each
 
 
 # ------------------------------------------------------------------------- import
