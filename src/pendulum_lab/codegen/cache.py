@@ -575,6 +575,8 @@ class KernelCache(numba_caching.Cache):
                     _read_index(index, stamp)
                 except _Damaged as damage:
                     _set_aside(index, str(damage), True)
+                    if index.exists():  # could not be set aside (open elsewhere, on Windows)
+                        return
                 numba_caching.IndexDataCacheFile(str(folder), base, stamp).save(key, payload)
         except OSError as err:  # full, or no longer writable: the kernel stays in memory
             _warn_once(f"cannot save a compiled kernel into {folder} "
