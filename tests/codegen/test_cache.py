@@ -299,6 +299,11 @@ _FIRST_USE_IN_A_PROCESS = textwrap.dedent("""\
     go, what, ready = sys.argv[1], sys.argv[2], sys.argv[3]
     if what == "tiny_without_locks":
         cache.file_lock = lambda path: contextlib.nullcontext()
+        save = cache.KernelCache._save_overload
+        def slow_save(self, sig, data):  # the other process looks meanwhile, on a busy machine
+            time.sleep(3.0)
+            save(self, sig, data)
+        cache.KernelCache._save_overload = slow_save
     open(ready, "w").close()
     deadline = time.monotonic() + 300
     while not os.path.exists(go):  # both processes start their first use together

@@ -11,6 +11,7 @@ never from timings.
 from __future__ import annotations
 
 import contextlib
+import errno
 import itertools
 import json
 import os
@@ -496,7 +497,7 @@ def _fake_msvcrt(really_locks: bool, calls: list):
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            raise OSError(36, "Resource deadlock avoided") from None
+            raise OSError(errno.EDEADLOCK, "Resource deadlock avoided") from None
 
     module.locking = locking
     return module
@@ -533,6 +534,17 @@ def test_file_lock_on_windows_locks_with_msvcrt(tmp_path, monkeypatch):
     assert {mode for mode, _, _ in calls} == {fake.LK_NBLCK, fake.LK_UNLCK}
     assert {(nbytes, position) for _, nbytes, position in calls} == {(1, 0)}
     assert sum(mode == fake.LK_UNLCK for mode, _, _ in calls) == 50
+    # an error other than "held elsewhere" is raised, not retried for ever
+    broken = types.ModuleType("msvcrt")
+    broken.LK_NBLCK, broken.LK_UNLCK = 2, 0
+
+    def fail(fd, mode, nbytes):
+        raise OSError(errno.EBADF, "Bad file descriptor")
+
+    broken.locking = fail
+    monkeypatch.setitem(sys.modules, "msvcrt", broken)
+    with pytest.raises(OSError, match="Bad file"), file_lock(tmp_path / "broken.lock"):
+        pass
     # negative control: a msvcrt whose locking locks nothing loses updates
     monkeypatch.setitem(sys.modules, "msvcrt", _fake_msvcrt(False, []))
     assert _count_in_two_threads(tmp_path / "counter_free") < 50

@@ -62,6 +62,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import errno
 import functools
 import hashlib
 import importlib.metadata
@@ -413,8 +414,10 @@ def _lock_functions():
             try:
                 msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
                 return
-            except OSError:  # held by another opening of the file: try again shortly
-                time.sleep(pause)
+            except OSError as err:
+                if err.errno not in _HELD_ELSEWHERE:
+                    raise
+                time.sleep(pause)  # held by another opening of the file: try again shortly
                 pause = min(2 * pause, 0.1)
 
     def unlock(fd):
@@ -424,6 +427,8 @@ def _lock_functions():
     return lock, unlock
 
 
+#: What ``msvcrt.locking`` raises while another opening of the file holds the lock.
+_HELD_ELSEWHERE = {errno.EACCES, errno.EDEADLK, getattr(errno, "EDEADLOCK", errno.EDEADLK)}
 _THREAD_LOCKS: dict[str, threading.Lock] = {}
 
 
