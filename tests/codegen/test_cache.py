@@ -103,6 +103,21 @@ def test_the_generator_and_injected_objects_count(fake_package):
         GENERATED, inject={"scale": np.array([2.0])})
 
 
+def test_a_package_kernels_files_follow_the_modules_it_imports(fake_package):
+    # a kernel of a package module (cached_njit) is keyed on its module's code and on every
+    # package module that imports in turn (relative imports too), as generated code is
+    def key():
+        cache._parsed.cache_clear()
+        return cache._module_key("pendulum_lab.kernel", "")
+
+    before = key()
+    helper = fake_package / "helper.py"
+    helper.write_text(helper.read_text().replace("Two times x.", "Twice x."))
+    assert key() == before  # a docstring
+    helper.write_text(helper.read_text().replace("2 * x", "x + x"))
+    assert key() != before  # negative control: code below the kernel
+
+
 def test_steps_with_different_coefficients_get_different_loops():
     # the step of a Runge-Kutta method closes over its tableau: the constants are in the key
     euler = Method.from_tableau("a_method", ButcherTableau(a=[[0.0]], b=[1.0]), "Euler")

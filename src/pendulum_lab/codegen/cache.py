@@ -350,6 +350,19 @@ def code_key(source: str, generator: str | None = None, inject: dict | None = No
     return digest.hexdigest()[:16]
 
 
+def _module_key(module: str, source: str) -> str:
+    """A key (16 hex digits) of a module's code, as :func:`code_key` is of generated code: the
+    syntax trees of the module and of every package module it imports, and the versions.
+    A module outside the package is keyed on its text and the package modules it imports."""
+    if not (module == PACKAGE or module.startswith(PACKAGE + ".")) or _module_path(module) is None:
+        return code_key(source)
+    digest = hashlib.sha256(_versions().encode())
+    for name in module_dependencies([module]):
+        digest.update(name.encode())
+        digest.update(_parsed(name)[0].encode())
+    return digest.hexdigest()[:16]
+
+
 def _write_atomically(path: Path, text: str) -> None:
     """Write ``path`` through a temporary name and rename it into place (several processes
     may race here). Opened as an ordinary file, so the umask gives it the permissions of the
@@ -513,7 +526,7 @@ class KernelCache(numba_caching.Cache):
             if module.startswith(MODULE_PREFIX):  # the file name holds its key
                 stem = module.removeprefix(MODULE_PREFIX)
             else:
-                stem = f"{module}-{code_key(source)}"
+                stem = f"{module}-{_module_key(module, source)}"
             qualname = function.__qualname__.replace("<", "").replace(">", "")
             base = (f"{stem}.{qualname}-{function.__code__.co_firstlineno}.py"
                     f"{sys.version_info[0]}{sys.version_info[1]}{getattr(sys, 'abiflags', '')}")
