@@ -81,6 +81,7 @@ def empty_caches() -> tuple[tempfile.TemporaryDirectory, dict]:
 def environment(src: Path, caches: dict) -> dict:
     env = {**os.environ, **caches, "PYTHONPATH": str(src / "src"), "PYTHONWARNINGS": "ignore"}
     env.pop("PENDULUM_LAB_COMPILE_NOTES", None)  # a student sees the notes
+    env.pop("PENDULUM_LAB_SHARED_CACHE", None)  # a first hour reads no image's kernels
     return env
 
 

@@ -21,6 +21,9 @@ FIRST_USE = (
     "pl.simulate(dp, [2.0, 2.5], [0, 0], t_end=1.0, dt=0.01)"
 )
 BARE_IMPORTS = "import scipy.integrate; import sympy"
+#: The import row: ``import pendulum_lab`` against the imports a student's notebook starts with.
+IMPORT_OURS = "import pendulum_lab"
+IMPORT_PEERS = "import scipy.integrate, sympy, matplotlib.pyplot"
 PHASES = r"""
 import json, time
 t0 = time.perf_counter()
@@ -68,7 +71,8 @@ def _fresh_process(code: str, env: dict | None = None) -> Sample:
 def _cold_process(code: str) -> Sample:
     """A fresh process whose kernel cache and Numba cache are empty temporary folders."""
     with tempfile.TemporaryDirectory() as kernels, tempfile.TemporaryDirectory() as numba_dir:
-        env = os.environ | {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": numba_dir}
+        env = {k: v for k, v in os.environ.items() if k != "PENDULUM_LAB_SHARED_CACHE"}
+        env |= {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": numba_dir}
         return _fresh_process(code, env)
 
 
@@ -116,6 +120,7 @@ def bench_first_use(cfg: Config) -> Section:
         "ours_cpu": ours_cpu,
         "peer_cpu": peer_cpu,
     }
+    rows.append(_import_row(cfg, details, data))
     if cfg.cold_runs:
         cold_samples = interleave(
             {
@@ -177,6 +182,33 @@ def bench_first_use(cfg: Config) -> Section:
         + "."
     )
     return Section("first_use", "2. First use", rows, details, data)
+
+
+def _import_row(cfg: Config, details: list, data: dict) -> Row:
+    """``import pendulum_lab`` on a warm machine against the peers' imports, fresh processes.
+
+    Nothing is compiled or loaded from the kernel cache at import (a first use does that and
+    says so), so the import is the package's modules and its dependencies' imports.
+    """
+    samples = interleave(
+        {
+            "ours": lambda: _fresh_process(IMPORT_OURS),
+            "peer": lambda: _fresh_process(IMPORT_PEERS),
+        },
+        cfg.first_use_runs,
+    )
+    ours, peer = med(samples["ours"], "wall"), med(samples["peer"], "wall")
+    ratio = ours / peer
+    details.append(
+        f"Import: fresh processes, `{IMPORT_OURS}` against `{IMPORT_PEERS}`, "
+        f"{cfg.first_use_runs} alternating runs each, medians of the wall time from outside; "
+        f"by the children's CPU time: ours {fmt_time(med(samples['ours']))}, peer "
+        f"{fmt_time(med(samples['peer']))}. Samples, wall (s): "
+        + "; ".join(f"{k} " + ", ".join(f"{x.wall:.2f}" for x in v) for k, v in samples.items())
+    )
+    data["import"] = {"ours": ours, "peer": peer, "ratio": ratio}
+    return Row("2", "import pendulum_lab (warm machine)", fmt_time(ours), fmt_time(peer),
+               f"{ratio:.2f}x", "ours/peer <= 2 (wall)", verdict(ratio, 2.0))
 
 
 def _import_times() -> list[tuple[str, float]]:

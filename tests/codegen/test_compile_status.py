@@ -166,18 +166,17 @@ def test_messages_for_each_expectation():
 
 # ------------------------------------------------------------------------------- time loops
 OSCILLATOR = '''\
-import numba
-
+from pendulum_lab.codegen.cache import cached_njit
 from pendulum_lab.codegen.signatures import ACCELERATION, HAMILTON
 
 
-@numba.njit(HAMILTON, cache=True)
+@cached_njit(HAMILTON)
 def hamilton(t, q, p, params, dq, dp):
     dq[0] = p[0]
     dp[0] = -params[0] * q[0]
 
 
-@numba.njit(ACCELERATION, cache=True)
+@cached_njit(ACCELERATION)
 def acceleration(t, q, v, params, out):
     out[0] = -params[0] * q[0]
 '''

@@ -40,6 +40,7 @@ import importlib.util
 import os
 import subprocess
 import sys
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -297,16 +298,34 @@ def _links(text: str) -> int:
 
 
 def run_warmup(args) -> int:
-    """Compile the numerical kernels now instead of on first use."""
+    """Compile the numerical kernels now instead of on first use.
+
+    With ``--cache DIR`` everything is compiled into ``DIR`` (read-only layers are not
+    consulted, so that ``DIR`` is complete on its own): an image's shared cache, read by its
+    users through ``PENDULUM_LAB_SHARED_CACHE=DIR``.
+    """
+    from ..codegen.cache import CACHE_VARIABLE, SHARED_VARIABLE, cache_layers
     from .warmup import warm_up
 
+    if args.cache is not None:
+        os.environ[CACHE_VARIABLE] = str(args.cache)
+        os.environ.pop(SHARED_VARIABLE, None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # said below, as the reason to stop
+        layers = cache_layers()
+    if layers.write is None:
+        where = args.cache if args.cache is not None else f"${CACHE_VARIABLE}"
+        print(f"pendulum-lab warmup: the kernel cache {where} cannot be written; give a "
+              f"writable folder with --cache DIR or {CACHE_VARIABLE}", file=sys.stderr)
+        return 1
     progress = {"bar": True, "lines": _progress_lines, "none": False}[args.progress]
     try:
         seconds = warm_up(ns=args.n, methods=args.methods, progress=progress)
     except (TypeError, ValueError) as err:
         print(f"pendulum-lab warmup: {err}", file=sys.stderr)
         return 2
-    print(f"pendulum_lab kernels ready for chains of {args.n} link(s) ({seconds:.1f} s)")
+    print(f"pendulum_lab kernels ready for chains of {args.n} link(s) ({seconds:.1f} s) in "
+          f"{layers.write}")
     return 0
 
 
@@ -321,6 +340,10 @@ def _add_warmup_command(subparsers) -> None:
                       help="chain lengths (numbers of links) to prepare (default: 1 2)")
     warm.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
                       help="methods to prepare (default: all of them)")
+    warm.add_argument("--cache", type=Path, default=None, metavar="DIR",
+                      help="compile into this folder (for an image: users then read it with "
+                      "PENDULUM_LAB_SHARED_CACHE=DIR); by default the user's kernel cache "
+                      "(PENDULUM_LAB_CACHE)")
     warm.add_argument("--progress", choices=("bar", "lines", "none"), default="bar",
                       help="a progress bar (default), one line 'DONE/TOTAL WHAT' per job "
                       "(for a program to read), or nothing")

@@ -162,9 +162,9 @@ print(json.dumps(times))
 def first_use_cost(n: int = 2, method="glrk4") -> FirstUseCost:
     """Measure the one-time compilation of a method's kernels, against loading and running.
 
-    Two fresh Python processes share new, empty temporary cache folders
-    (``PENDULUM_LAB_CACHE`` for the generated kernel source,
-    ``NUMBA_CACHE_DIR`` for Numba's machine code): the first compiles, the
+    Two fresh Python processes share a new, empty temporary kernel cache
+    (``PENDULUM_LAB_CACHE``: the generated source and Numba's machine code; no
+    shared layer, ``PENDULUM_LAB_SHARED_CACHE``, is read): the first compiles, the
     second loads. Each runs a 1 s simulation of ``n`` links (100 steps) twice.
     The caches of the running process and of the user are not touched.
 
@@ -189,8 +189,9 @@ def first_use_cost(n: int = 2, method="glrk4") -> FirstUseCost:
     name = get_method(method).name
     firsts, seconds = [], []
     with tempfile.TemporaryDirectory() as kernels, tempfile.TemporaryDirectory() as machine_code:
-        env = os.environ | {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": machine_code,
-                            "PYTHONIOENCODING": "utf-8"}
+        env = {k: v for k, v in os.environ.items() if k != "PENDULUM_LAB_SHARED_CACHE"}
+        env |= {"PENDULUM_LAB_CACHE": kernels, "NUMBA_CACHE_DIR": machine_code,
+                "PYTHONIOENCODING": "utf-8"}
         for _ in range(2):
             done = subprocess.run([sys.executable, "-c", _FIRST_USE, str(n), name], env=env,
                                   capture_output=True, text=True, encoding="utf-8",

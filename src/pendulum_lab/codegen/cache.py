@@ -1,7 +1,7 @@
-"""Generated code, written into a cache folder and imported under a name that says what it is.
+"""Generated code and compiled kernels on disk: keys, layers, locks and damaged files.
 
-Numba keeps compiled machine code on disk (``cache=True``) but checks only the file a function
-is defined in: a change in a function that the file imports would leave stale machine code. So
+**Keys.** Numba keeps compiled machine code on disk but checks only the file a function is
+defined in: a change in a function that the file imports would leave stale machine code. So
 every generated module is named after a key of everything its code depends on, found by
 reading the code, not listed by hand (:func:`code_key`):
 
@@ -13,50 +13,94 @@ reading the code, not listed by hand (:func:`code_key`):
 * the versions of Python, NumPy, Numba and llvmlite.
 
 A module of the package that a key needs but cannot find is an error, never a stale load.
+The package's own cached kernels (:func:`cached_njit` in a package module) are keyed the same
+way, on their module's code.
 
-Loading is safe from several threads and from several processes sharing a cache folder:
+**Layers.** Kernels are looked up in read-only layers first (``$PENDULUM_LAB_SHARED_CACHE``:
+folders separated by ``os.pathsep``, filled once by ``pendulum-lab warmup --cache DIR``, for
+example in a classroom image), then in the user's own cache (``$PENDULUM_LAB_CACHE``, by
+default the user cache folder), which takes whatever is missing. Every layer holds the
+generated modules in ``<layer>/kernels`` and Numba's index and data files (``.nbi``,
+``.nbc``) in ``<layer>/kernels/__pycache__``, for generated and package kernels alike
+(``NUMBA_CACHE_DIR`` is not consulted for them). Nothing is ever written into a read-only
+layer, not even a lock file. A user cache that cannot be written (read-only, no permission,
+a missing home) never stops a run: it is read if it exists, and whatever is missing is
+compiled in memory for the session, with one :class:`KernelCacheWarning` that names the
+folder and the variable to set.
+
+Numba's own cache cannot do this: each of its locators accepts a folder only if it can write
+a file there (``_CacheLocator.ensure_cache_path``), so a read-only folder is never read, and
+with no writable folder ``cache=True`` raises "no locator available". Hence
+:func:`cached_njit`, which gives a Numba dispatcher a :class:`KernelCache` of the layers, and
+is the one way the package caches a kernel.
+
+**Damaged files.** An index or data file that cannot be read back (truncated, garbage, from
+another Numba version or for another source) and a generated module whose text is not what
+its name promises are reported (:class:`KernelCacheWarning` naming the file), set aside as
+``<name>.damaged`` in the user's cache (skipped in a read-only layer) and built again.
+
+**Threads and processes** sharing a cache folder:
 
 * **threads:** a generated module is executed (and its kernels compiled) by one thread while
-  others that need it wait, and only a complete module is ever handed out. The keys are
-  computed under the same lock: CPython 3.11 keeps one recursion counter for building syntax
-  trees per interpreter, and two threads parsing at once can fail with "SystemError: AST
-  constructor recursion depth mismatch" (python/cpython#106905), which a Dask worker with two
-  threads met on first use;
-* **processes:** Numba writes each cache file to a temporary name and renames it into place, so
-  no process reads a half-written file, but it picks the file number of a new compiled version
-  from the index it read before compiling: two processes compiling one function at once can give
-  two versions one number, so that the index and the data disagree (numba/numba#10128). So a
-  generated module is written, executed and first called (where Numba compiles it or loads it
-  from disk) under an exclusive lock on a file beside it (``<module>.lock``, :func:`file_lock`):
-  the first process compiles and saves, the second waits and loads. Where the system has no
-  ``fcntl`` (Windows) only the threads of one process are kept apart.
+  others that need it wait, and only a complete module is ever handed out. Syntax trees are
+  built under a lock of their own: CPython 3.11 keeps one recursion counter for building
+  syntax trees per interpreter, and two threads parsing at once can fail with "SystemError:
+  AST constructor recursion depth mismatch" (python/cpython#106905), which a Dask worker with
+  two threads met on first use;
+* **processes:** Numba writes each cache file to a temporary name and renames it into place,
+  so no process reads a half-written file, but the number of a new data file is picked from
+  the index: two processes saving one function at once can give two versions one number, so
+  that the index and the data disagree (numba/numba#10128). So every save holds an exclusive
+  lock on ``__pycache__/index.lock`` of the user's layer, and a generated module is written,
+  executed and first called (where its kernels compile or load) under a lock on a file
+  beside it (``<module>.lock``): the first process compiles and saves, the second waits and
+  loads. :func:`file_lock` locks with ``fcntl.flock`` on Linux and macOS and with
+  ``msvcrt.locking`` on Windows.
 """
 
 from __future__ import annotations
 
 import ast
 import contextlib
+import errno
 import functools
 import hashlib
 import importlib.metadata
 import importlib.util
 import inspect
+import linecache
 import os
+import pickle
 import platform
 import sys
-import tempfile
 import threading
+import time
+import types
+import uuid
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numba
 import numpy as np
+from numba.core import caching as numba_caching
+from numba.core import compiler as numba_compiler
+from numba.core import dispatcher as numba_dispatcher
 
+from . import compile_status
 from .compile_status import compiling
 
 __all__ = [
+    "CACHE_VARIABLE",
     "MODULE_PREFIX",
     "PACKAGE",
+    "SHARED_VARIABLE",
+    "CacheLayers",
+    "KernelCache",
+    "KernelCacheWarning",
     "cache_dir",
+    "cache_layers",
+    "cached_njit",
     "code_key",
     "file_lock",
     "imported_modules",
@@ -68,17 +112,111 @@ PACKAGE = "pendulum_lab"
 _PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 #: Generated modules are imported under this prefix (followed by their stem and key).
 MODULE_PREFIX = "pendulum_lab_kernels_"
-#: Held while a module is generated, keyed or loaded (and while syntax trees are built).
+#: The user's own, writable cache (its kernels are in the folder ``kernels`` inside it).
+CACHE_VARIABLE = "PENDULUM_LAB_CACHE"
+#: Read-only cache layers, searched before the user's (folders separated by ``os.pathsep``).
+SHARED_VARIABLE = "PENDULUM_LAB_SHARED_CACHE"
+#: Held while a module is generated, keyed or loaded.
 _LOADING = threading.RLock()
+#: Held while a syntax tree is built; nothing else is taken meanwhile (see above).
+_PARSING = threading.Lock()
 
 
-def cache_dir() -> Path:
-    """Where generated kernels live: ``$PENDULUM_LAB_CACHE`` or the user cache folder."""
-    root = os.environ.get("PENDULUM_LAB_CACHE")
+class KernelCacheWarning(UserWarning):
+    """A kernel cache folder that cannot be written or read, or a damaged file in one."""
+
+
+def cache_dir() -> Path | None:
+    """Where the user's generated kernels live: ``$PENDULUM_LAB_CACHE/kernels``, by default
+    ``kernels`` in the user cache folder (``$XDG_CACHE_HOME`` or ``~/.cache``, then
+    ``pendulum_lab``); None when there is no home folder to put it in."""
+    root = os.environ.get(CACHE_VARIABLE)
     if root is None:
-        base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+        base = os.environ.get("XDG_CACHE_HOME")
+        if not base:
+            try:
+                base = Path.home() / ".cache"
+            except RuntimeError:  # no home folder (a service account, a bare container)
+                return None
         root = Path(base) / "pendulum_lab"
     return Path(root) / "kernels"
+
+
+def _shared_dirs() -> list[Path]:
+    value = os.environ.get(SHARED_VARIABLE, "")
+    return [Path(part) / "kernels" for part in value.split(os.pathsep) if part.strip()]
+
+
+@dataclass(frozen=True)
+class CacheLayers:
+    """The kernel folders of this process: ``read`` in the order they are searched (the
+    read-only layers, then the user's if it exists), ``write`` the user's if it can be
+    written (None: whatever is missing is compiled in memory)."""
+
+    read: tuple[Path, ...]
+    write: Path | None
+
+
+_warned: set[str] = set()
+
+
+def _warn_once(text: str) -> None:
+    """A :class:`KernelCacheWarning`, once per text and process, shown as one line (it is
+    attributed to the package, not to a line of code that would be printed below it)."""
+    if text not in _warned:
+        _warned.add(text)
+        warnings.warn_explicit(text, KernelCacheWarning, filename=PACKAGE, lineno=0)
+
+
+@functools.lru_cache(maxsize=64)
+def _unwritable_reason(folder: Path) -> str | None:
+    """None if ``folder`` can be created and written, else why not.
+
+    Checked once per folder and process by writing a file, as Numba's locators do:
+    permission bits say nothing to root, nor on Windows.
+    """
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / f".write-test-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+        with open(probe, "xb"):
+            pass
+        probe.unlink()
+    except OSError as err:
+        return err.strerror or type(err).__name__
+    return None
+
+
+def cache_layers() -> CacheLayers:
+    """The kernel folders to search and the one to write (see the module docstring).
+
+    Warns once per folder (:class:`KernelCacheWarning`) when the user's cache cannot be
+    written, and when a shared layer is not a folder.
+    """
+    read = []
+    for folder in _shared_dirs():
+        if folder.is_dir():
+            read.append(folder)
+        else:
+            _warn_once(f"the shared kernel cache {folder} (from {SHARED_VARIABLE}) "
+                       "is not a folder; it is ignored")
+    user = cache_dir()
+    write = None
+    if user is None:
+        _warn_once("there is no home folder for the kernel cache; kernels are "
+                   f"compiled in memory for this session. Set {CACHE_VARIABLE} to a writable "
+                   "folder to keep them.")
+    elif user not in read:  # (the user's cache named as a shared layer is read-only too)
+        reason = _unwritable_reason(user)
+        if reason is None:
+            write = user
+            read.append(user)
+        else:
+            if user.is_dir():
+                read.append(user)  # read what it holds
+            _warn_once(f"cannot write the kernel cache {user} ({reason}); kernels "
+                       f"missing from it are compiled in memory for this session. Set "
+                       f"{CACHE_VARIABLE} to a writable folder to keep them.")
+    return CacheLayers(tuple(read), write)
 
 
 def _module_path(module: str) -> Path | None:
@@ -137,7 +275,7 @@ def _parsed(module: str) -> tuple[str, frozenset[str]]:
     if path is None:
         raise ImportError(f"generated code depends on {module}, which is not a module of the "
                           f"package at {_PACKAGE_ROOT}: regenerate it from the current code")
-    with _LOADING:  # building syntax trees from two threads at once can fail (see above)
+    with _PARSING:  # building syntax trees from two threads at once can fail (see above)
         tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     imports = imported_modules(tree, module, path.name == "__init__.py")
     return ast.dump(_without_docstrings(tree)), frozenset(imports - {module})
@@ -193,7 +331,7 @@ def code_key(source: str, generator: str | None = None, inject: dict | None = No
     ``generator`` is the package module that wrote ``source``; ``inject`` the objects set as
     module globals before the source runs (their modules and constants count too).
     """
-    with _LOADING:  # building syntax trees from two threads at once can fail (see above)
+    with _PARSING:  # building syntax trees from two threads at once can fail (see above)
         tree = ast.parse(source)
     modules = set(imported_modules(tree, "generated", False))
     constants = []
@@ -212,80 +350,440 @@ def code_key(source: str, generator: str | None = None, inject: dict | None = No
     return digest.hexdigest()[:16]
 
 
-def _write_if_changed(path: Path, text: str) -> None:
-    # Rewriting an unchanged file would change its timestamp and invalidate Numba's cache;
-    # several processes may race here, so the file is replaced atomically.
-    if path.exists() and path.read_text() == text:
-        return
+def _module_key(module: str, source: str) -> str:
+    """A key (16 hex digits) of a module's code, as :func:`code_key` is of generated code: the
+    syntax trees of the module and of every package module it imports, and the versions.
+    A module outside the package is keyed on its text and the package modules it imports."""
+    if not (module == PACKAGE or module.startswith(PACKAGE + ".")) or _module_path(module) is None:
+        return code_key(source)
+    digest = hashlib.sha256(_versions().encode())
+    for name in module_dependencies([module]):
+        digest.update(name.encode())
+        digest.update(_parsed(name)[0].encode())
+    return digest.hexdigest()[:16]
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    """Write ``path`` through a temporary name and rename it into place (several processes
+    may race here). Opened as an ordinary file, so the umask gives it the permissions of the
+    user's other files (readable by every user of an image, unlike a private temporary
+    file)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as handle:
-        handle.write(text)
-    os.replace(tmp, path)
+    temporary = path.with_name(f"{path.name}.tmp.{uuid.uuid4().hex[:16]}")
+    try:
+        with open(temporary, "x", encoding="utf-8", newline="\n") as handle:
+            handle.write(text)
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            temporary.unlink()
+        raise
+
+
+def _set_aside(path: Path, reason: str, writable: bool) -> None:
+    """Report a damaged cache file; rename it ``<name>.damaged`` if its layer is writable."""
+    if not writable:
+        _warn_once(f"damaged kernel cache file {path} ({reason}) in a read-only "
+                   "layer; skipped (rebuild that layer with `pendulum-lab warmup --cache`)")
+        return
+    aside = path.with_name(path.name + ".damaged")
+    try:
+        os.replace(path, aside)
+    except FileNotFoundError:
+        return  # another process set it aside first
+    except OSError as err:
+        _warn_once(f"damaged kernel cache file {path} ({reason}) could not be "
+                   f"set aside ({err.strerror}); delete it")
+        return
+    _warn_once(f"damaged kernel cache file {path} ({reason}); set aside as "
+               f"{aside.name}, building it again")
+
+
+# ------------------------------------------------------------------------------ file locks
+def _lock_functions():
+    """``(lock, unlock)`` of an open file descriptor for this system, or None.
+
+    ``fcntl.flock`` where it exists (Linux, macOS, the BSDs); ``msvcrt.locking`` of the first
+    byte on Windows, retried without blocking (its blocking mode gives up after 10 s).
+    Both locks belong to one opening of the file, so two threads of one process exclude each
+    other as two processes do.
+    """
+    try:
+        import fcntl
+    except ImportError:
+        pass
+    else:
+        return (lambda fd: fcntl.flock(fd, fcntl.LOCK_EX),
+                lambda fd: fcntl.flock(fd, fcntl.LOCK_UN))
+    try:
+        import msvcrt
+    except ImportError:
+        return None
+
+    def lock(fd):
+        pause = 0.005
+        while True:
+            os.lseek(fd, 0, os.SEEK_SET)  # the locked byte is the one at the position
+            try:
+                msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+                return
+            except OSError as err:
+                if err.errno not in _HELD_ELSEWHERE:
+                    raise
+                time.sleep(pause)  # held by another opening of the file: try again shortly
+                pause = min(2 * pause, 0.1)
+
+    def unlock(fd):
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)
+
+    return lock, unlock
+
+
+#: What ``msvcrt.locking`` raises while another opening of the file holds the lock.
+_HELD_ELSEWHERE = {errno.EACCES, errno.EDEADLK, getattr(errno, "EDEADLOCK", errno.EDEADLK)}
+_THREAD_LOCKS: dict[str, threading.Lock] = {}
 
 
 @contextlib.contextmanager
 def file_lock(path: Path):
     """An exclusive lock on ``path`` (created if missing), shared by every process and thread.
 
-    Each use opens the file anew, and ``flock`` locks belong to an open file, so two threads of
-    one process exclude each other as two processes do. Without ``fcntl`` (Windows) it locks
-    nothing; the caller's threads are then kept apart by :data:`_LOADING` alone.
+    Each use opens the file anew, so two threads of one process exclude each other as two
+    processes do (see :func:`_lock_functions`). On a system with neither ``fcntl`` nor
+    ``msvcrt`` only the threads of this process are kept apart. Only ever called on a
+    writable layer.
     """
-    try:
-        import fcntl
-    except ImportError:  # pragma: no cover (Windows)
-        yield
+    functions = _lock_functions()
+    if functions is None:
+        with _THREAD_LOCKS.setdefault(str(path), threading.Lock()):
+            yield
         return
+    lock, unlock = functions
     path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "a") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        lock(fd)
         try:
             yield
         finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
+            unlock(fd)
+    finally:
+        os.close(fd)
+
+
+# ------------------------------------------------------------------------- Numba's files
+class _Damaged(Exception):
+    """A cache file that cannot be read back; the message says why."""
+
+
+class KernelCache(numba_caching.Cache):
+    """Numba's disk cache of one function, over the layers of :func:`cache_layers`.
+
+    A compiled version is loaded from the first layer that holds it and saved into the
+    user's writable layer only (nowhere when there is none: it stays in memory). Its files
+    are Numba's own (an index ``<base>.nbi`` and data files ``<base>.<k>.nbc``, in
+    ``<layer>/kernels/__pycache__``), written by Numba's code; reading them back is done
+    here, so that a file that cannot be read is told apart from a missing one and set aside
+    (:func:`_set_aside`). Every load and every compilation is told to
+    :mod:`~pendulum_lab.codegen.compile_status`, so that a compilation is reported as a load
+    only when nothing was compiled.
+
+    ``<base>`` is Numba's file name of the function (``<file stem>.<name>-<line>.py<version>``);
+    for a function of a package module the stem is the module's name and :func:`code_key`
+    of its code, so that a change in any module it imports gives new files.
+    """
+
+    def __init__(self, py_func):  # noqa: D107 (Numba's constructor needs a writable folder)
+        self._name = repr(py_func)
+        self._py_func = py_func
+        self._identity = None
+        self.enable()
+
+    @property
+    def cache_path(self) -> str:
+        folder = cache_layers().write
+        return str(folder / "__pycache__") if folder is not None else "(in memory)"
+
+    def flush(self) -> None:
+        """Nothing to drop: a stale file never matches (its name or stamp differs)."""
+
+    def _base_and_stamp(self) -> tuple[str, bytes] | None:
+        """Numba's file name base of the function and the stamp of its source; None when
+        the function has no source to key it on (then it is not cached)."""
+        if self._identity is None:
+            function = self._py_func
+            module = function.__module__
+            path = function.__code__.co_filename
+            source = _GENERATED_SOURCES.get(path)
+            if source is None:
+                try:
+                    with open(path, encoding="utf-8") as handle:
+                        source = handle.read()
+                except OSError:
+                    self._identity = ()
+                    return None
+            if module.startswith(MODULE_PREFIX):  # the file name holds its key
+                stem = module.removeprefix(MODULE_PREFIX)
+            else:
+                stem = f"{module}-{_module_key(module, source)}"
+            qualname = function.__qualname__.replace("<", "").replace(">", "")
+            base = (f"{stem}.{qualname}-{function.__code__.co_firstlineno}.py"
+                    f"{sys.version_info[0]}{sys.version_info[1]}{getattr(sys, 'abiflags', '')}")
+            self._identity = (base, hashlib.sha256(source.encode()).digest())
+        return self._identity or None
+
+    def _load_overload(self, sig, target_context):
+        identity = self._base_and_stamp() if self._enabled else None
+        if identity is not None:
+            base, stamp = identity
+            key = self._index_key(sig, target_context.codegen())
+            layers = cache_layers()
+            for folder in layers.read:
+                result = self._load_from(folder / "__pycache__", base, stamp, key,
+                                         target_context, writable=folder == layers.write)
+                if result is not None:
+                    compile_status.count_load()
+                    return result
+        compile_status.count_compilation()  # Numba compiles it next
+        return None
+
+    def _load_from(self, folder: Path, base: str, stamp: bytes, key, target_context,
+                   writable: bool):
+        index = folder / f"{base}.nbi"
+        try:
+            overloads = _read_index(index, stamp)
+        except _Damaged as damage:
+            _set_aside(index, str(damage), writable)
+            return None
+        name = overloads.get(key)
+        if name is None:
+            return None
+        data = folder / name
+        try:
+            payload = pickle.loads(data.read_bytes())
+        except FileNotFoundError:
+            return None  # set aside, or replaced, by another process a moment ago
+        except Exception as err:  # noqa: BLE001 (any way of failing to read it back)
+            _set_aside(data, f"unreadable: {type(err).__name__}: {err}", writable)
+            return None
+        try:
+            return numba_compiler.CompileResult._rebuild(target_context, *payload)
+        except Exception as err:  # noqa: BLE001
+            _set_aside(data, f"cannot be rebuilt: {type(err).__name__}: {err}", writable)
+            return None
+
+    def _save_overload(self, sig, data):
+        if not self._enabled:
+            return
+        identity = self._base_and_stamp()
+        folder = cache_layers().write
+        if identity is None or folder is None or not _cachable(data):
+            return
+        base, stamp = identity
+        folder = folder / "__pycache__"
+        key = self._index_key(sig, data.codegen)
+        payload = data._reduce()
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            # the index is read, extended and written again: one process at a time
+            with file_lock(folder / "index.lock"):
+                index = folder / f"{base}.nbi"
+                try:
+                    _read_index(index, stamp)
+                except _Damaged as damage:
+                    _set_aside(index, str(damage), True)
+                    if index.exists():  # could not be set aside (open elsewhere, on Windows)
+                        return
+                numba_caching.IndexDataCacheFile(str(folder), base, stamp).save(key, payload)
+        except OSError as err:  # full, or no longer writable: the kernel stays in memory
+            _warn_once(f"cannot save a compiled kernel into {folder} "
+                       f"({err.strerror or err}); it is compiled in memory for this session. "
+                       f"Set {CACHE_VARIABLE} to a writable folder to keep it.")
+
+
+def _read_index(path: Path, stamp: bytes) -> dict:
+    """The overloads an index file lists (``{}`` if there is none), read as Numba writes it:
+    Numba's version, then the pickled ``(stamp, overloads)``."""
+    try:
+        with open(path, "rb") as handle:
+            try:
+                version = pickle.load(handle)
+                rest = handle.read()
+            except Exception as err:  # noqa: BLE001 (truncated, garbage)
+                raise _Damaged(f"unreadable: {type(err).__name__}: {err}") from None
+    except FileNotFoundError:
+        return {}
+    if version != numba.__version__:
+        raise _Damaged(f"written by Numba {version}, this is Numba {numba.__version__}")
+    try:
+        found, overloads = pickle.loads(rest)
+    except Exception as err:  # noqa: BLE001
+        raise _Damaged(f"unreadable: {type(err).__name__}: {err}") from None
+    if found != stamp or not isinstance(overloads, dict):
+        raise _Damaged("written for another source")
+    return overloads
+
+
+def _cachable(result) -> bool:
+    """Whether Numba could save this compiled version (as its ``check_cachable``)."""
+    if any(not lifted.can_cache for lifted in result.lifted):
+        return False
+    return not result.library.has_dynamic_globals
+
+
+def cached_njit(signature=None, **options):
+    """``numba.njit`` with the package's disk cache (:class:`KernelCache`): the one way the
+    package caches a kernel, in its modules and in generated code.
+
+    ``@cached_njit`` compiles on first use; ``@cached_njit(signature)`` compiles (or loads)
+    when the decorator runs and accepts only that signature, as ``numba.njit(signature)``
+    does, so a package module gives no signature (nothing compiles at import) and
+    generated code does (its kernels compile while :func:`load_generated` runs it).
+    ``options`` are ``numba.njit``'s (``error_model``, ``nogil``, ...), not ``cache``.
+    """
+    if inspect.isfunction(signature) and not options:  # used bare: @cached_njit
+        return cached_njit()(signature)
+    if "cache" in options:
+        raise TypeError("cached_njit caches always; do not pass `cache`")
+
+    def decorate(function):
+        dispatcher = numba.njit(**options)(function)
+        if not isinstance(dispatcher, numba_dispatcher.Dispatcher):
+            return dispatcher  # NUMBA_DISABLE_JIT=1: the plain Python function
+        # what ``Dispatcher.enable_caching`` sets, with the layered cache instead of Numba's
+        dispatcher._cache = KernelCache(function)
+        if signature is not None:
+            from numba.core import typeinfer
+
+            with typeinfer.register_dispatcher(dispatcher):
+                dispatcher.compile(signature)
+            dispatcher.disable_compile()
+        return dispatcher
+
+    return decorate
+
+
+# --------------------------------------------------------------------------- generated code
+#: The text of every generated module executed in this process, by its file name (the key of
+#: a kernel's files is taken from it, without reading the file again).
+_GENERATED_SOURCES: dict[str, str] = {}
+
+
+def _numba_disk_cache_calls(source: str) -> list[int]:
+    """Lines of ``source`` that ask Numba for its own disk cache (``cache=True``)."""
+    with _PARSING:
+        tree = ast.parse(source)
+    return [node.lineno for node in ast.walk(tree) if isinstance(node, ast.Call)
+            and any(k.arg == "cache" and not (isinstance(k.value, ast.Constant)
+                                                and k.value.value is False)
+                    for k in node.keywords)]
+
+
+def _find_source(folders, name: str, source: str, writable: Path | None) -> Path | None:
+    """The first file ``name`` in ``folders`` whose text is ``source``; a file whose text is
+    not (cut short, edited) is set aside where it can be and skipped."""
+    for folder in folders:
+        path = folder / name
+        try:
+            text = path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            continue
+        except (OSError, UnicodeDecodeError) as err:
+            text = f"unreadable: {err}"
+        if text == source:
+            return path
+        _set_aside(path, "its text is not the generated source its name stands for",
+                   folder == writable)
+    return None
+
+
+def _execute(name: str, source: str, filename: str, inject: dict | None):
+    """Run ``source`` as the module ``name`` whose file is ``filename``; registered in
+    ``sys.modules`` before it runs, as the import system does (Numba finds a function's
+    module there), and removed again if it fails."""
+    module = types.ModuleType(name)
+    module.__file__ = filename
+    module.__dict__.update(inject or {})
+    _GENERATED_SOURCES[filename] = source
+    if not os.path.exists(filename):  # in memory: tracebacks and Numba's messages show lines
+        linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+    sys.modules[name] = module
+    try:
+        exec(compile(source, filename, "exec"), module.__dict__)  # noqa: S102 (our own code)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module
 
 
 def load_generated(stem: str, source: str, inject: dict | None = None,
                    what: str | None = None):
-    """Write generated Python ``source`` into the kernel cache folder (if new) and import it.
+    """Run generated Python ``source`` as a module, its file in the kernel cache.
 
     The file is ``<stem>_<key>.py`` with the key of :func:`code_key` (the calling module counts
     as the generator), and the module is registered in ``sys.modules`` as
     ``pendulum_lab_kernels_<stem>_<key>``; a second call returns the same module (its kernels
     stay the objects that other generated code imports by name). ``inject`` sets module globals
     before the source runs (objects that cannot be imported by name). Returns
-    ``(module, path)``.
+    ``(module, path)``; ``path`` is None when the module lives in memory only (no cache layer
+    holds it and none can be written).
 
-    Running the module compiles its kernels (their Numba signatures are given) or loads them
-    from Numba's disk cache; that is announced as a compilation of ``what`` (for people:
-    "glrk4 for the double pendulum"; by default the stem), expected to load when the file
-    was already there (:func:`~pendulum_lab.codegen.compile_status.compiling`).
+    The file is taken from the first layer of :func:`cache_layers` that holds it with the
+    right text; otherwise it is written into the user's layer. Its kernels are declared with
+    :func:`cached_njit` and a signature (Numba's own ``cache=True`` is refused: it cannot
+    read a read-only layer), so they compile, or load from a layer, while the module runs;
+    that is announced as a compilation of ``what`` (for people: "glrk4 for the double
+    pendulum"; by default the stem), expected to load when the file was already there
+    (:func:`~pendulum_lab.codegen.compile_status.compiling`).
 
-    The file is written and executed under :func:`file_lock` of ``<stem>_<key>.lock``, so that
-    one process compiles and saves while another waits, then loads.
+    Where the user's layer can be written, the file is written and run under
+    :func:`file_lock` of ``<stem>_<key>.lock`` there, so that one process compiles and saves
+    while another waits, then loads.
     """
     caller = inspect.currentframe().f_back
     generator = caller.f_globals.get("__name__") if caller is not None else None
     with _LOADING:  # one thread builds a module; the others wait and get the finished one
         key = code_key(source, generator, inject)
-        path = cache_dir() / f"{stem}_{key}.py"
+        filename = f"{stem}_{key}.py"
         name = f"{MODULE_PREFIX}{stem}_{key}"
         if name in sys.modules:
-            return sys.modules[name], path
-        with file_lock(path.with_suffix(".lock")):  # and one process
-            seen_before = path.exists()
-            _write_if_changed(path, source)
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            module.__dict__.update(inject or {})
-            # Registered before it runs, as the import system does: Numba's cache finds a
-            # function's file through its module. Removed again if it fails.
-            sys.modules[name] = module
-            try:
-                with compiling(what or f"the generated module {stem}", loading=seen_before):
-                    spec.loader.exec_module(module)
-            except BaseException:
-                del sys.modules[name]
-                raise
+            module = sys.modules[name]
+            return module, (Path(module.__file__) if os.path.exists(module.__file__) else None)
+        lines = _numba_disk_cache_calls(source)
+        if lines:
+            raise ValueError(f"generated source `{stem}` asks Numba for its own disk cache "
+                             f"(cache=True, line {lines[0]}), which cannot read a read-only "
+                             "layer: declare kernels with pendulum_lab.codegen.cache."
+                             "cached_njit(signature)")
+        layers = cache_layers()
+        shared = [folder for folder in layers.read if folder != layers.write]
+        path = _find_source(shared, filename, source, None)
+        expected_load = path is not None or (
+            layers.write is not None and (layers.write / filename).exists())
+        with compiling(what or f"the generated module {stem}", loading=expected_load,
+                       kept=layers.write is not None):
+            if layers.write is None:
+                guard = contextlib.nullcontext()
+            else:  # and one process
+                guard = file_lock(layers.write / f"{stem}_{key}.lock")
+            with guard:
+                if path is None and layers.write is not None:
+                    path = _find_source([layers.write], filename, source, layers.write)
+                    if path is None:
+                        path = _write_or_none(layers.write / filename, source)
+                shown = str(path) if path is not None else f"<in memory>/{filename}"
+                module = _execute(name, source, shown, inject)
     return module, path
+
+
+def _write_or_none(path: Path, source: str) -> Path | None:
+    """Write a generated module; None (it then runs from memory) if the folder refuses."""
+    try:
+        _write_atomically(path, source)
+    except OSError as err:
+        _warn_once(f"cannot write {path} ({err.strerror or err}); kernels are "
+                   f"compiled in memory for this session. Set {CACHE_VARIABLE} to a writable "
+                   "folder to keep them.")
+        return None
+    return path

@@ -26,6 +26,12 @@ the work in :func:`compiling`, which tells two kinds of audience:
 report its compile time apart from its run time (``Trajectory.compile_time``). Nested
 compilations (a kernel loaded while its time loop is prepared) count and speak once, as
 the outermost.
+
+What a compilation turned out to be is known at its end: the kernel cache
+(:class:`~pendulum_lab.codegen.cache.KernelCache`) counts every kernel it loads and every one
+Numba compiles (:func:`count_load`, :func:`count_compilation`). A compilation that compiled
+nothing but loaded something ends as a load ("loaded ... from the disk cache"), whatever was
+expected at its start; one that compiled anything ends as a compilation.
 """
 
 from __future__ import annotations
@@ -45,8 +51,11 @@ __all__ = [
     "NOTE_DELAY",
     "STATES",
     "Compilation",
+    "compile_counts",
     "compile_seconds",
     "compiling",
+    "count_compilation",
+    "count_load",
     "listen",
 ]
 
@@ -69,17 +78,24 @@ class Compilation:
     what : str
         What is compiled, for people ("glrk4 for the double pendulum").
     loading : bool or None
-        True when its machine code is expected in the disk cache (the generated source was
-        there before), False when it is expected to compile, None when it is not known.
+        At the start: True when its machine code is expected in the disk cache (the
+        generated source was there before), False when it is expected to compile, None when
+        it is not known. At the end, what happened: True when kernels were loaded and none
+        was compiled, False when one was compiled (the expectation when the cache saw
+        neither).
     state : {"started", "finished", "failed"}
     seconds : float
         Seconds since it started (0 when ``state`` is ``"started"``).
+    kept : bool
+        Whether what is compiled is saved to the disk cache (False when no kernel cache can
+        be written: it is then compiled for this session only).
     """
 
     what: str
     loading: bool | None
     state: str
     seconds: float = 0.0
+    kept: bool = True
 
     @property
     def message(self) -> str:
@@ -98,11 +114,15 @@ class Compilation:
                 return f"loading {what} from the disk cache…"
             if self.loading is None:
                 return f"preparing {what} (compiled once per machine, then loaded from disk)…"
+            if not self.kept:
+                return f"compiling {what} for this session (the kernel cache cannot be written)…"
             return f"compiling {what}, once per machine…"
         if self.state == "failed":
             return f"compiling {what} failed after {seconds:.1f} s"
         if self.loading:
             return f"loaded {what} from the disk cache in {seconds:.1f} s"
+        if not self.kept:
+            return f"compiled {what} in {seconds:.1f} s, for this session only"
         return (f"compiled {what} in {seconds:.1f} s (once per machine: from now on it loads "
                 "from the disk cache)")
 
@@ -111,18 +131,38 @@ class _ThreadState(threading.local):
     def __init__(self):
         self.depth = 0
         self.seconds = 0.0
+        self.compiled_seconds = 0.0  # of outermost compilations that compiled something
+        self.loads = 0
+        self.compilations = 0
         self.listeners: list[Callable[[Compilation], None]] = []
 
 
 _STATE = _ThreadState()
 
 
-def compile_seconds() -> float:
-    """Seconds the calling thread has spent in compilations so far (outermost ones only).
+def compile_seconds(compiled_only: bool = False) -> float:
+    """Seconds the calling thread has spent in compilations so far (outermost ones only);
+    with ``compiled_only``, in those that compiled something (not only loaded).
 
     The difference of two readings is the compile time of the work between them.
     """
-    return _STATE.seconds
+    return _STATE.compiled_seconds if compiled_only else _STATE.seconds
+
+
+def compile_counts() -> tuple[int, int]:
+    """``(loaded, compiled)``: kernels the calling thread has loaded from the disk cache and
+    compiled so far (counted by the kernel cache)."""
+    return _STATE.loads, _STATE.compilations
+
+
+def count_load() -> None:
+    """Called by the kernel cache when it has loaded a kernel's machine code from disk."""
+    _STATE.loads += 1
+
+
+def count_compilation() -> None:
+    """Called by the kernel cache when Numba is about to compile a kernel (not in a cache)."""
+    _STATE.compilations += 1
 
 
 @contextmanager
@@ -151,7 +191,7 @@ def _tell(listeners, event: Compilation) -> None:
 
 
 @contextmanager
-def compiling(what: str, *, loading: bool | None = None):
+def compiling(what: str, *, loading: bool | None = None, kept: bool = True):
     """Announce the compilation (or load from the disk cache) that the block does.
 
     Parameters
@@ -160,6 +200,8 @@ def compiling(what: str, *, loading: bool | None = None):
         What is compiled, for people: "glrk4 for the double pendulum".
     loading : bool or None
         Whether the machine code is expected in the disk cache (see :class:`Compilation`).
+    kept : bool
+        Whether it is saved to the disk cache (see :class:`Compilation`).
 
     Inside another compilation of the same thread the block is part of that one: it neither
     speaks nor counts separately.
@@ -175,10 +217,11 @@ def compiling(what: str, *, loading: bool | None = None):
             state.depth -= 1
         return
     listeners = list(state.listeners)
-    started = Compilation(what, loading, "started")
+    started = Compilation(what, loading, "started", kept=kept)
     note = None if listeners or _notes_off() else _Note(started)
     _tell(listeners, started)
     state.depth = 1
+    counts = state.loads, state.compilations
     start = time.perf_counter()
     ok = False
     try:
@@ -188,7 +231,11 @@ def compiling(what: str, *, loading: bool | None = None):
         seconds = time.perf_counter() - start
         state.depth = 0
         state.seconds += seconds
-        ended = Compilation(what, loading, "finished" if ok else "failed", seconds)
+        loaded, compiled = state.loads - counts[0], state.compilations - counts[1]
+        outcome = False if compiled else (True if loaded else loading)
+        if not outcome:
+            state.compiled_seconds += seconds
+        ended = Compilation(what, outcome, "finished" if ok else "failed", seconds, kept)
         if note is not None:
             note.close(ended)
         _tell(listeners, ended)

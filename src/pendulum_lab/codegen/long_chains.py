@@ -34,10 +34,11 @@ signatures of :mod:`pendulum_lab.codegen.signatures` and serve every chain longe
 than ``UNROLLED_MAX_LINKS``, conservative or forced: ``n`` is
 ``q.size``, and ``params`` is ``(m_1..m_n, l_1..l_n, g)``, followed for a
 forced chain by ``(c_1..c_n, A, Omega)`` (``Chain.parameters``); its length
-tells which. They are compiled once per machine (``cache=True``), for every
-``n``. :class:`LoopedChain` gives :class:`~pendulum_lab.PendulumModel` the
-same functions for batches of states. This module is imported on first use
-of a long chain, so ``import pendulum_lab`` does not compile it.
+tells which. They are compiled once per machine, for every ``n``, and kept on
+disk (:func:`~pendulum_lab.codegen.cache.cached_njit`). :class:`LoopedChain`
+gives :class:`~pendulum_lab.PendulumModel` the same functions for batches of
+states. This module is imported on first use of a long chain, so ``import
+pendulum_lab`` does not compile it.
 
 References
 ----------
@@ -50,9 +51,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from .cache import cached_njit
 from .signatures import ACCELERATION, HAMILTON
 
 __all__ = [
@@ -69,7 +70,7 @@ WORK_ROWS = 8
 
 
 # --------------------------------------------------------------------------- pieces
-@numba.njit(cache=True)
+@cached_njit
 def chain_geometry(q, params, work):
     """Fill ``work[SIN]``, ``work[COS]`` and the tail masses ``work[TAIL]``."""
     total = 0.0
@@ -80,7 +81,7 @@ def chain_geometry(q, params, work):
         work[COS, i] = math.cos(q[i])
 
 
-@numba.njit(cache=True)
+@cached_njit
 def solve_mass(params, work, rhs, out):
     """Solve ``M(q) out = rhs`` in ``O(n)``; :func:`chain_geometry` must have filled ``work``.
 
@@ -121,7 +122,7 @@ def solve_mass(params, work, rhs, out):
         s1 += scale * work[SIN, i]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def link_sums(params, work, u):
     """``work[SUM_C]_i = sum_(j != i) mu_max(i,j) l_j c_j u_j``, and ``work[SUM_S]`` with ``s_j``.
 
@@ -149,7 +150,7 @@ def link_sums(params, work, u):
         front_s += weight * work[SIN, i]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def conservative_rates(params, work, u, weights, out):
     """``out_i = -weights_i l_i sum_j mu_max(i,j) l_j sin(theta_i - theta_j) u_j - g mu_i l_i s_i``.
 
@@ -165,7 +166,7 @@ def conservative_rates(params, work, u, weights, out):
         out[i] = -weights[i] * length * sine_sum - g * work[TAIL, i] * length * work[SIN, i]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def add_forces(t, v, params, out):
     """``out += Q(v, t)`` for a forced chain (``params`` of length ``3n + 3``); else nothing.
 
@@ -186,7 +187,7 @@ def add_forces(t, v, params, out):
 
 
 # --------------------------------------------------------------------------- kernels
-@numba.njit(HAMILTON, cache=True)
+@cached_njit(HAMILTON)
 def hamilton(t, q, p, params, dq, dp):
     """``dq = M(q)^-1 p``; ``dp = dL/dq (+ Q)`` at ``omega = dq``, for any ``n``."""
     work = np.empty((WORK_ROWS, q.size))
@@ -196,7 +197,7 @@ def hamilton(t, q, p, params, dq, dp):
     add_forces(t, dq, params, dp)
 
 
-@numba.njit(ACCELERATION, cache=True)
+@cached_njit(ACCELERATION)
 def acceleration(t, q, v, params, out):
     """``out = M(q)^-1 (F(q, v) (+ Q(v, t)))``, for any ``n``."""
     work = np.empty((WORK_ROWS, q.size))
@@ -212,7 +213,7 @@ def acceleration(t, q, v, params, out):
 VELOCITIES, MOMENTA, RATES, FORCING, ACCELERATIONS, FORCES = range(6)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _rows(kind, theta, other, parameter_rows, t, out):
     """``parameter_rows``: shape (1, P), shared, or (K, P), one row per state."""
     n = theta.shape[1]

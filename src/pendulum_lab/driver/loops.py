@@ -171,8 +171,7 @@ with the kernels {first} and {second}; do not edit.
 
 The step ({step}) is set by pendulum_lab.driver.loops before this runs.
 """
-import numba
-
+from pendulum_lab.codegen.cache import cached_njit
 from pendulum_lab.codegen.lowlevel import align_stack
 from pendulum_lab.driver.loops import RUN, time_loop
 from {first_module} import {first_name} as first_kernel
@@ -182,7 +181,7 @@ from {second_module} import {second_name} as second_kernel
 COORDINATES = {n}
 
 
-@numba.njit(RUN, cache=True, nogil=True)
+@cached_njit(RUN, nogil=True)
 def run(separable, damping_rates, q, p, t0, h, n_steps, first_step, save_every, params, saved_q,
         saved_p, stats, memory):
     """time_loop(step, first_kernel, second_kernel, ...) with this module's step and kernels."""

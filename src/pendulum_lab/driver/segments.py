@@ -143,6 +143,8 @@ class SegmentedRun:
     compile_time : float
         Seconds spent before stepping on compiling (or loading) the kernels and the time
         loop; 0 when they were ready (see ``Trajectory.compile_time``).
+    compiled : bool
+        Whether that time was spent compiling, not only loading (``Trajectory.compiled``).
     """
 
     def __init__(self, model, theta0, start, given_momenta: bool, *, method, dt: float,
@@ -165,11 +167,12 @@ class SegmentedRun:
         # What the method carries from step to step (its last stage slopes, the
         # rounding it compensates): kept across segments, so that the segmented
         # run is the one long run to the last bit.
-        compiled_before = compile_seconds()
+        compiled_before = compile_seconds(), compile_seconds(compiled_only=True)
         field = hamiltonian_field(self.model)
         check_method_fits(model, method, field)
         self._compiled = compile_method(method, field, model.n)
-        self.compile_time = compile_seconds() - compiled_before
+        self.compile_time = compile_seconds() - compiled_before[0]
+        self.compiled = compile_seconds(compiled_only=True) > compiled_before[1]
         self._memory = self._compiled.new_memory(self._theta.shape[0])
         self.members = np.arange(self._theta.shape[0])
         self.done = 0

@@ -128,6 +128,9 @@ class Trajectory:
         Seconds the run spent before stepping on compiling its kernels and its time loop, or
         loading them from the disk cache (:mod:`pendulum_lab.codegen.compile_status`); 0 when
         this process had them ready. Not part of ``wall_time``.
+    compiled : bool
+        True when some of that time was spent compiling (a kernel was in no disk cache);
+        False when it was spent loading machine code from the disk cache only.
     """
 
     t: np.ndarray
@@ -144,6 +147,7 @@ class Trajectory:
     wall_time: float
     completed: bool
     compile_time: float = 0.0
+    compiled: bool = False
 
     @property
     def energy_error(self) -> np.ndarray:
@@ -753,7 +757,7 @@ def simulate(
     method, theta0, start, (t_end, dt, n_steps), save_every, t0 = run_arguments(
         model, theta0, omega0, p0, t_end, dt, method, save_every, t0, allow_long_run
     )
-    compiled_before = compile_seconds()
+    compiled_before = compile_seconds(), compile_seconds(compiled_only=True)
     if check.choice("keep", keep, ("all", "final")) == "final":
         if save_every != 1:
             raise ValueError("give `save_every` only with keep='all' (keep='final' keeps the "
@@ -782,10 +786,11 @@ def simulate(
     y = to_method_variables(row_models, method, q, start.reshape(-1, model.n),
                              given_momenta=p0 is not None, t=t0)
     compiled = compile_method(method, field, model.n)
-    compile_time = compile_seconds() - compiled_before
+    compile_time = compile_seconds() - compiled_before[0]
+    compiled_anything = compile_seconds(compiled_only=True) > compiled_before[1]
     traj = integrate(model, compiled, q, y, batch_shape, t_end=t_end, dt=dt, n_steps=n_steps,
                      save_every=save_every, t0=t0, progress=progress)
-    traj = dataclasses.replace(traj, compile_time=compile_time)
+    traj = dataclasses.replace(traj, compile_time=compile_time, compiled=compiled_anything)
     return traj if reduction is None else reduction.restored(traj, batch_shape)
 
 

@@ -45,10 +45,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from .. import validation as check
+from ..codegen.cache import cached_njit
 from ..codegen.compile_status import compiling
 from ..model.pendulum import PendulumModel
 from .model_checks import simple_pendulum_model
@@ -168,7 +168,7 @@ def iterate(phi, action, k: float, iterations: int, wrap: bool = True):
     return phis, actions
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _first_crossings(ks, phis, actions, limit):
     out = np.full((ks.size, phis.size), -1, dtype=np.int64)
     period = 2.0 * np.pi

@@ -22,6 +22,7 @@ import math
 import numba
 import numpy as np
 
+from ..codegen.cache import cached_njit
 from ..codegen.lowlevel import span, vector
 from .step import jit_step, kernel_function
 from .stopping import MAX_SWEEPS, fixed_point_status
@@ -46,7 +47,7 @@ def add_scaled(out, x, factor, y):
         out[i] = x[i] + factor * y[i]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def remove_damping(p, damping_rate, dp):
     """``dp += damping_rate p``: from a conformal field's ``dp/dt`` to its Hamiltonian part's.
 

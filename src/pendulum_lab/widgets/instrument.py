@@ -199,8 +199,12 @@ class Instrument(WidgetWithPicture):
         its error where the model conserves it, its change (and why) where it does not."""
         traj = self.trajectory
         change = traj.energy_error
-        compiled = (f" (after compiling for {traj.compile_time:.1f} s, once per machine)"
-                    if traj.compile_time >= 0.05 else "")
+        compiled = ""
+        if traj.compile_time >= 0.05 and traj.compiled:
+            compiled = f" (after compiling for {traj.compile_time:.1f} s, once per machine)"
+        elif traj.compile_time >= 0.05:
+            compiled = (f" (after loading its compiled kernels from the disk cache in "
+                        f"{traj.compile_time:.1f} s)")
         run = (
             f"{len(traj.t) - 1} steps of {traj.method.name} (dt = {traj.dt:g} s) in "
             f"{traj.wall_time:.2f} s{compiled}; E(0) = {traj.energy[0]:.4f} J, "
