@@ -31,18 +31,21 @@ VENV = ROOT / ".venv"
 STAMP = VENV / ".installed-lab"
 
 
-def venv_python(venv: Path = VENV, windows: bool | None = None) -> Path:
-    """The interpreter of the virtual environment ``venv``, where ``venv`` puts it on this OS.
+def venv_python(venv: Path | None = None, windows: bool | None = None) -> Path:
+    """The interpreter of the virtual environment ``venv`` (default ``.venv``) on this OS.
 
     ``windows`` (default: whether this is Windows) chooses the layout, so that the tests see
     both: ``Scripts\\python.exe`` on Windows, ``bin/python`` on macOS and Linux.
     """
+    venv = VENV if venv is None else venv
     windows = os.name == "nt" if windows is None else windows
     return venv / "Scripts" / "python.exe" if windows else venv / "bin" / "python"
 
 
-def needs_install(stamp: Path = STAMP, pyproject: Path = ROOT / "pyproject.toml") -> bool:
+def needs_install(stamp: Path | None = None, pyproject: Path | None = None) -> bool:
     """True unless the package was installed after ``pyproject.toml`` last changed."""
+    stamp = STAMP if stamp is None else stamp
+    pyproject = ROOT / "pyproject.toml" if pyproject is None else pyproject
     return not stamp.exists() or stamp.stat().st_mtime < pyproject.stat().st_mtime
 
 

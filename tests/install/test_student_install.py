@@ -27,6 +27,7 @@ the reason, except under ``CI=true``, where it fails them.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import re
@@ -49,8 +50,10 @@ README = REPO_ROOT / "README.md"
 STUDENT_SECTION = "## Open the course"
 # The README's fenced block of each OS: its language tag, and the interpreter it must name.
 STUDENT_BLOCKS = {"bat": "py", "sh": "python3"}
-sys.path.insert(0, str(REPO_ROOT / "tools"))
-import find_python  # noqa: E402  (tools/ is no package)
+_spec = importlib.util.spec_from_file_location("find_python",
+                                               REPO_ROOT / "tools" / "find_python.py")
+find_python = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(find_python)
 
 WINDOWS = os.name == "nt"
 
