@@ -7,7 +7,12 @@
 #   make docs   build the site into docs/_build/html (notebooks executed, with a cache)
 # and the instructor's kit:
 #   make assignments   build every graded assignment into dist/assignments/<name>/
-PYTHON ?= python3
+# The main environment runs on the newest supported Python found here, the floor environment
+# on the oldest: the two ends of the support window (tools/find_python.py reads the versions
+# from pyproject.toml's classifiers; found once per use, and only when an environment is made).
+# Either can be given: make test PYTHON=python3.12 FLOORS_PYTHON=/usr/bin/python3.11
+PYTHON ?= $(shell python3 tools/find_python.py newest || echo python3)
+FLOORS_PYTHON ?= $(shell python3 tools/find_python.py oldest || echo python3)
 VENV ?= .venv
 BIN := $(VENV)/bin
 # Passed to `pendulum-lab` by `make lab` (its options, then JupyterLab's after `--`).
@@ -40,7 +45,7 @@ $(VENV)/.installed-%: pyproject.toml | $(BIN)/python
 
 # The floors pinned, the test tools at their newest (the lab extra: the command line's tests).
 $(FLOORS_BIN)/.installed: pyproject.toml tools/floor_pins.py
-	$(PYTHON) -m venv $(FLOORS_VENV)
+	$(FLOORS_PYTHON) -m venv $(FLOORS_VENV)
 	$(FLOORS_BIN)/python -m pip install --upgrade pip
 	$(FLOORS_BIN)/python tools/floor_pins.py > $(FLOORS_VENV)/floors.txt
 	$(FLOORS_BIN)/python -m pip install -e ".[lab,test]" -c $(FLOORS_VENV)/floors.txt
@@ -80,11 +85,12 @@ test-floors: $(FLOORS_BIN)/.installed
 	$(FLOORS_BIN)/python tools/run_tests.py --floors-only
 
 # The inner loop of day-to-day work: unit, property and symbolic tests and the doctests, without
-# the notebooks, the browser, the website, Binder or the graded assignments (docs/testing.md).
+# the notebooks, the browser, the website, Binder, the installs or the graded assignments
+# (docs/testing.md).
 check: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder \
-		--ignore=tests/assignments
+		--ignore=tests/install --ignore=tests/assignments
 
 bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/run.py

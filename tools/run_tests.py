@@ -6,8 +6,9 @@ process waiting on a kernel, so on a machine with two cores one pytest leaves a 
 script splits the suite into two shards of about the same length, runs them side by side, prints
 each shard's output when it ends and fails if either fails:
 
-* ``browser``: the browser tests, the website and the Binder environment (tests that start their
-  own servers and environments, kept together so they never compete for a port or a folder);
+* ``browser``: the browser tests, the website, the Binder environment and the installs from a
+  fresh clone, the sdist and the wheel (tests that start their own servers and environments,
+  kept together so they never compete for a port or a folder);
 * ``core``: everything else: doctests, unit, property and symbolic tests, and the graded
   assignments. The notebooks run under nbval in the Binder test, in Binder's environment.
 
@@ -31,7 +32,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-BROWSER_SHARD = ["tests/browser", "tests/site", "tests/binder"]
+BROWSER_SHARD = ["tests/browser", "tests/site", "tests/binder", "tests/install"]
 # The notebooks' nbval run is the Binder test's (tests/binder): it runs them in the environment
 # Binder builds, so they are not run a fourth time here.
 CORE_SHARD = ["src", "tests"] + [f"--ignore={path}" for path in BROWSER_SHARD]
