@@ -400,7 +400,7 @@ def end_process_tree(process: subprocess.Popen) -> None:
 def _new_group() -> dict:
     """Popen arguments that keep a child out of the terminal's Ctrl-C (the grader ends it)."""
     if sys.platform == "win32":
-        return {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
+        return {"creationflags": getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0x200)}
     return {"start_new_session": True}
 
 
@@ -531,18 +531,18 @@ def _run_submission(config: dict) -> int:
             client.timeout = cell_seconds
 
     notes, skipped = [], set()
-    alive = False
-    client = None
+    client, stuck = None, None
     for _attempt in range(4):  # a cell that ignores its interrupt is skipped in a fresh kernel
         client = new_client()
-        alive, stuck = True, None
+        alive, stuck, died = True, None, False
         for index, cell in enumerate(notebook.cells):
             if cell.cell_type != "code":
                 continue
             if index in skipped:
                 cell.outputs = [nbformat.v4.new_output(
-                    "error", ename="TimeoutError", traceback=[],
-                    evalue=f"not run: it outlasted its {cell_seconds:g} s and ignored the stop")]
+                    "error", ename="GraderSkipped", traceback=[],
+                    evalue="not run: in an earlier run it outlasted its time and ignored the "
+                           "interrupt, or ended the kernel")]
                 continue
             try:
                 client.execute_cell(cell, index)
@@ -554,14 +554,13 @@ def _run_submission(config: dict) -> int:
                     stuck = index
                     break
             except DeadKernelError:
-                cell.outputs.append(nbformat.v4.new_output(
-                    "error", ename="DeadKernelError", traceback=[],
-                    evalue="the kernel died in this cell (a memory limit, os._exit, a crash)"))
-                alive = False
+                stuck, died = index, True
                 break
         if stuck is None:
             break
-        notes.append(f"cell {stuck + 1} ran past {cell_seconds:g} s and ignored the interrupt: "
+        notes.append(f"cell {stuck + 1} ended its kernel (os._exit, a crash): the notebook was "
+                     "run again in a new kernel without that cell" if died else
+                     f"cell {stuck + 1} ran past {cell_seconds:g} s and ignored the interrupt: "
                      "the kernel was stopped and the notebook run again without that cell")
         skipped.add(stuck)
         with contextlib.suppress(Exception):
@@ -569,6 +568,7 @@ def _run_submission(config: dict) -> int:
         for cell in notebook.cells:
             if cell.cell_type == "code":
                 cell.outputs = []
+    alive = stuck is None
     nbformat.write(notebook, work / "executed.ipynb")
     if alive:
         sources = [inspect.getsource(function)
@@ -621,6 +621,7 @@ class _Channel:
         self.reply_seconds = reply_seconds
         self.lines: queue.Queue = queue.Queue()
         self.stderr: list[str] = []
+        self.requests = 0
         threading.Thread(target=self._read_out, daemon=True).start()
         threading.Thread(target=self._read_err, daemon=True).start()
 
@@ -656,6 +657,7 @@ class _Channel:
         return message if isinstance(message, dict) else {"error": ["GraderError", "not JSON"]}
 
     def ask(self, request: dict) -> dict:
+        self.requests += 1
         try:
             self.process.stdin.write((json.dumps(request) + "\n").encode())
             self.process.stdin.flush()
@@ -760,6 +762,7 @@ def _check_submission(config: dict) -> int:
         popen.update(cwd=work, env={**os.environ, "PYTHONWARNINGS": "ignore", "HOME": str(work),
                                     "MPLBACKEND": "Agg"})
     cell_seconds = float(config["cell_seconds"])
+    started_at = time.perf_counter()
     process = subprocess.Popen(command, **popen)
     channel = _Channel(process, cell_seconds + INTERRUPT_GRACE_SECONDS + 30)
     tests, notes = [], []
@@ -773,6 +776,7 @@ def _check_submission(config: dict) -> int:
     conditions = [str(note)[:200] for note in started.get("limits", [])[:5]]
     if not started.get("alive"):
         notes.append("the kernel was gone at the end of the run: answers could not be read")
+    ran_at = time.perf_counter()
     answers = _StudentAnswers(channel, cell_seconds)
     for name, source in hidden_test_files(Path(config["zip"])).items():
         test_file = ExceptionTestFile.from_string(source, path=f"tests/{name}.py")
@@ -784,6 +788,9 @@ def _check_submission(config: dict) -> int:
     with contextlib.suppress(subprocess.TimeoutExpired):
         process.wait(timeout=10)
     end_process_tree(process)
+    conditions.append(f"timing: the notebook ran in {ran_at - started_at:.1f} s, the hidden "
+                      f"tests took {time.perf_counter() - ran_at:.1f} s ({channel.requests} "
+                      "requests to the kernel)")
     result = {"tests": tests, "score": sum(test["score"] for test in tests), "notes": notes,
               "conditions": conditions}
     Path(config["result"]).write_text(json.dumps(result))
