@@ -1135,7 +1135,8 @@ def grade_class(folder: Path, submissions: dict[str, Path], out: Path, *, jobs: 
         print(f"{skipped} submissions unchanged since they were graded: kept (--regrade to "
               "grade them again)")
     sandboxed = limits.get("sandbox", True)
-    if sandboxed and todo and "cache" not in limits:
+    runs_kernels = any(read_submission(path)[0] is not None for path in todo.values())
+    if sandboxed and runs_kernels and "cache" not in limits:
         limits["cache"] = out / ".kernel-cache"
         if not (limits["cache"] / "ready").exists():
             print("compiling the integrators once for the sandboxes (the solutions graded "

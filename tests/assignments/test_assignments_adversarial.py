@@ -326,7 +326,8 @@ def test_control_without_the_sandbox_the_vandal_succeeds(kit, arena, tmp_path):
 def test_control_without_limits_the_memory_bomb_allocates(tmp_path):
     """The memory bomb's allocation succeeds in a process without the sandbox's limits, and
     fails with MemoryError once the grader's limit is applied to the process."""
-    probe = (f"import sys; sys.path.insert(0, {str(Path(tool.__file__).parent)!r}); import assignments as tool\n"
+    tools = str(Path(tool.__file__).parent)
+    probe = (f"import sys; sys.path.insert(0, {tools!r}); import assignments as tool\n"
              "if sys.argv[1] == 'limited': tool._limit_resources(6144, 256)\n"
              "import numpy as np\n"
              "try:\n    np.empty(2**33, dtype=np.uint8); print('allocated')\n"
