@@ -103,7 +103,8 @@ def _vandal(canary: Path, earlier: Path, secret: Path, dist: Path, port: int) ->
             print("vandal: sent to the network")
         except OSError as err:
             print("vandal: no network:", type(err).__name__)
-        subprocess.Popen(["sleep", "{LEFTOVER}1"], start_new_session=True)
+        # Detached twice: the shell exits at once, and the sleep leaves the process tree.
+        subprocess.Popen(["sh", "-c", "sleep {LEFTOVER}1 >/dev/null 2>&1 &"]).wait()
         """)
 
 
