@@ -87,6 +87,7 @@ INTERRUPT_GRACE_SECONDS = 5.0
 NO_SANDBOX_FLAG = "--no-sandbox-i-trust-the-submissions"
 #: Output kept per cell of the executed notebook [characters]; the rest is dropped and noted.
 OUTPUT_CHARS = 100_000
+DROPPED_OUTPUT = "the grader dropped the rest of this cell's output"
 #: The longest line of data accepted from a sandbox [bytes] (an answer, a function's result).
 REPLY_BYTES = 32 * 1024 * 1024
 #: Where the sandbox sees its work folder, its cache and this file.
@@ -485,11 +486,10 @@ def _run_submission(config: dict) -> int:
         def output(self, outs, msg, display_id, cell_index):
             kept = sum(len(json.dumps(out)) for out in outs)
             if kept > OUTPUT_CHARS:
-                if not any(out.get("name") == "grader" for out in outs):
+                if not any(DROPPED_OUTPUT in str(out.get("text", "")) for out in outs):
                     outs.append(nbformat.v4.new_output(
-                        "stream", name="grader",
-                        text=f"[the grader dropped this cell's output after {OUTPUT_CHARS} "
-                             "characters]"))
+                        "stream", name="stderr",
+                        text=f"[{DROPPED_OUTPUT} after {OUTPUT_CHARS} characters]"))
                 return None
             return super().output(outs, msg, display_id, cell_index)
 
@@ -1192,7 +1192,10 @@ def _build_command(args) -> int:
                 f"({', '.join(f'{q} {p:g}' for q, p in points.items())}); built in "
                 f"{time.perf_counter() - start:.1f} s")
         if args.check:
-            solutions = grade(folder, folder / "autograder" / master.name, sandbox=sandbox)
+            # The kernels compiled here serve the later solutions' sandboxes too.
+            solutions = grade(folder, folder / "autograder" / master.name, sandbox=sandbox,
+                              cache=Path(args.dist).resolve() / ".kernel-cache",
+                              warm_cache=True)
             line += (f"; solutions score {solutions.score:g}/{solutions.max_score:g} "
                      f"(graded in {solutions.seconds:.1f} s)")
             if solutions.score != solutions.max_score:

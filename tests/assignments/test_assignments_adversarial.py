@@ -256,6 +256,7 @@ def test_the_notes_say_what_happened(arena):
     assert "not a notebook" in notes("not_a_notebook") and "is empty" in notes("empty")
     huge = _case(arena, "huge_output").executed
     assert sum(len(json.dumps(cell.get("outputs", []))) for cell in huge.cells) < 2_000_000
+    assert tool.DROPPED_OUTPUT in json.dumps(huge.cells[2].outputs)
     every = _case(arena, "vandal").results["notes"]
     assert any(note.startswith("isolation: bubblewrap") for note in every)
     assert any(note.startswith("memory:") for note in every)
