@@ -1,8 +1,9 @@
 """Shared by the assignment tests: the grading tool loaded as a module, the session's kit.
 
 ``tools/assignments.py`` (the command behind ``make assignments``) is driven as a library. Each
-grading runs a submission in a fresh kernel, so the kit builds every assignment once per session
-and keeps the solutions' gradings for every test that needs them.
+grading runs a submission in a fresh kernel in a sandbox, so the kit builds every assignment once
+per session, keeps the solutions' gradings for every test that needs them, and keeps the kernels
+they compiled for every later sandbox to start from (a copy each).
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ class Kit:
                         zip(NAMES, tool.masters(), strict=True)}
         self._solutions = {}
         self.seconds = {}
+        # The compiled kernels every sandbox starts from, filled by the solutions' gradings.
+        self.cache = work / "kernel-cache"
 
     def master(self, name: str) -> nbformat.NotebookNode:
         return nbformat.read(tool.ASSIGNMENTS / f"{name}.ipynb", as_version=4)
@@ -56,6 +59,7 @@ class Kit:
             nbformat.write(notebook, path)
         else:
             path = Path(notebook)
+        limits.setdefault("cache", self.cache)
         result = tool.grade(self.folders[name], path, **limits)
         self.seconds[f"{name} {label}"] = round(result.seconds, 1)
         # Shown by pytest when the test fails: why a question lost its points, where it hung.
@@ -66,7 +70,8 @@ class Kit:
     def solutions(self, name: str):
         if name not in self._solutions:
             self._solutions[name] = self.grade(
-                name, self.folders[name] / "autograder" / f"{name}.ipynb", "solutions")
+                name, self.folders[name] / "autograder" / f"{name}.ipynb", "solutions",
+                warm_cache=True)
         return self._solutions[name]
 
 
