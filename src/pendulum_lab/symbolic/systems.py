@@ -498,6 +498,11 @@ class MechanicalSystem:
 
         return mass
 
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_mass_function", None)  # a lambdified function: made again when used
+        return state
+
     def _prove_positive(self) -> bool:
         """Whether ``M`` is positive semidefinite everywhere, proved symbolically.
 
@@ -588,8 +593,9 @@ class MechanicalSystem:
         bad = np.flatnonzero(lowest <= 1e-12 * scale)
         if bad.size:
             at = grid[usable][bad[0]]
+            depends = self.mass_matrix.free_symbols
             place = ", ".join(f"{s} = {v:g}" for s, v in zip((*self.q, self.t), at)
-                              if s is not self.t or len(axes[-1]) > 1)
+                              if s in depends)
             raise ValueError(
                 f"the mass matrix is not positive definite at {place} (its smallest "
                 f"eigenvalue there is {lowest[bad[0]]:.3g}): the kinetic energy would be "
