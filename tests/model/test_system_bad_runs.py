@@ -15,7 +15,7 @@ import pendulum_lab as pl
 from pendulum_lab.model import SystemModel
 
 th = sp.Symbol("theta", real=True)
-m, l, g = sp.symbols("m l g", positive=True)
+m, l, g = sp.symbols("m l g", positive=True)  # noqa: E741 (the rod's length, as written)
 
 
 def hanging(**arguments):
@@ -164,4 +164,4 @@ def test_explore_energy_refuses_a_system_consistently_with_the_other_messages(el
         widgets.explore_energy(elastic)
     with pytest.raises(TypeError, match="explore, explore_equilibrium, the simulators and "
                                         "the drawings accept it.*explore_energy among them"):
-        elastic.lengths
+        _ = elastic.lengths

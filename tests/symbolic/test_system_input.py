@@ -11,7 +11,7 @@ from pendulum_lab.symbolic import systems
 from pendulum_lab.symbolic.systems import MAX_COORDINATES, MechanicalSystem
 
 a, b, x, th = sp.symbols("a b x theta", real=True)
-m, l, g = sp.symbols("m l g", positive=True)
+m, l, g = sp.symbols("m l g", positive=True)  # noqa: E741 (the rod's length, as written)
 t = sp.Symbol("t", real=True)
 x_dot = sp.Symbol("x_dot", real=True)
 VALUES = {m: 1.0, l: 1.0, g: 9.81}
@@ -144,11 +144,23 @@ def test_forces_that_are_not_a_sequence_are_a_type_error_naming_forces(forces):
     (sp.Integral(sp.sin(x) * th, (x, 0, 1)), "Integral"), (sp.Heaviside(th), "Heaviside"),
     (sp.Abs(th), "Abs"), (sp.sign(th), "sign"), (sp.Max(th, 0), "Max"),
     (sp.Derivative(sp.Function("f")(th), th), "Derivative"),
+    (sp.Function("sin")(th), "sin \\(an undefined function\\)"),
 ])
 def test_a_function_the_equations_cannot_be_generated_from_is_named_with_those_accepted(
         term, named):
     with pytest.raises(ValueError, match=rf"`potential` holds {named}.*may use only sin, cos"):
         pendulum(potential=term)
+
+
+@pytest.mark.parametrize("constant, message", [
+    (sp.GoldenRatio, "the constant GoldenRatio: the constants accepted are pi and E"),
+    (sp.oo, "oo: numbers must be real and finite"), (sp.nan, "nan: numbers must be real"),
+    (2 * sp.I, "I: numbers must be real and finite"),
+])
+def test_a_constant_that_is_not_a_real_finite_number_or_pi_or_e_is_refused(constant, message):
+    with pytest.raises(ValueError, match=f"`potential` holds {message}"):
+        pendulum(potential=constant * th)
+    assert pendulum(potential=(sp.pi + sp.E) * th).potential.has(sp.pi)  # negative control
 
 
 def test_the_accepted_functions_are_accepted_and_differentiated():
@@ -226,3 +238,14 @@ def test_a_derivation_expected_to_be_long_shows_progress(monkeypatch, capsys):
     monkeypatch.setattr(systems, "PROGRESS_AFTER", 0.0)
     systems.chain_system(2)
     assert "kinetic energy of a chain of 2 links" in capsys.readouterr().err
+
+
+def test_is_identically_zero_refuses_a_string_instead_of_running_it(monkeypatch):
+    from pendulum_lab.symbolic.mechanics import is_identically_zero
+
+    called = []
+    monkeypatch.setattr(os, "getcwd", lambda: called.append(True) or "/")
+    with pytest.raises(TypeError, match="`expr` must be a SymPy expression, got a string"):
+        is_identically_zero("__import__('os').getcwd()")
+    assert not called
+    assert is_identically_zero(sp.sin(th) ** 2 + sp.cos(th) ** 2 - 1)  # negative control

@@ -86,6 +86,7 @@ PROGRESS_AFTER = 1.0
 ACCEPTED_FUNCTIONS = {f.__name__: f for f in (
     sp.sin, sp.cos, sp.tan, sp.sinh, sp.cosh, sp.tanh, sp.exp, sp.log, sp.asin, sp.acos,
     sp.atan, sp.atan2, sp.sqrt)}
+_ACCEPTED_CLASSES = frozenset(ACCEPTED_FUNCTIONS.values())
 _ACCEPTED_TEXT = (", ".join(ACCEPTED_FUNCTIONS) + ", powers (**) and the constants pi and E")
 #: The nodes a string may hold (checked before SymPy reads it; no attribute, index, call of
 #: anything but an accepted function by name, or literal other than a number).
@@ -187,9 +188,12 @@ def _require_smooth(name: str, expr: sp.Expr) -> None:
             if not (node.is_real and node.is_finite):
                 raise ValueError(f"`{name}` holds {node}: numbers must be real and finite")
             continue
-        if node is sp.I or isinstance(node, sp.NumberSymbol):
+        if node is sp.I:
             raise ValueError(f"`{name}` holds {node}: numbers must be real and finite")
-        if isinstance(node, sp.Function) and type(node).__name__ in ACCEPTED_FUNCTIONS:
+        if isinstance(node, sp.NumberSymbol):
+            raise ValueError(f"`{name}` holds the constant {node}: the constants accepted are "
+                             "pi and E (give another as a number)")
+        if isinstance(node, sp.Function) and node.func in _ACCEPTED_CLASSES:
             continue
         what = type(node).__name__ if isinstance(node, sp.Function) else sp.sstr(node)
         why = ("an undefined function" if isinstance(node, sp.core.function.AppliedUndef)
