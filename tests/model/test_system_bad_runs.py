@@ -41,6 +41,13 @@ def test_replace_applies_the_constructors_checks(elastic):
     assert loose.replace(m=3.0).parameter_values[plain] == 3.0
 
 
+def test_a_family_checks_every_members_values_against_the_declared_assumptions(elastic):
+    with pytest.raises(ValueError, match="`m` must be positive \\(it is declared positive\\), "
+                                         "got 0"):
+        elastic.family(m=[1.0, 0.0, 2.0])
+    assert elastic.family(m=[1.0, 0.5, 2.0]).shape == (3,)  # negative control
+
+
 @pytest.mark.parametrize("period, error, message", [
     (float("nan"), ValueError, "positive finite number, got nan"),
     (-1, ValueError, "positive finite number, got -1"),

@@ -426,6 +426,8 @@ class SystemFamily(FamilyMembers, SystemModel):
         defaults = dict(zip(map(str, base.system.parameters), base._params))
         self._params = tuple(np.array(np.broadcast_to(self.values.get(name, value), shape),
                                       dtype=float) for name, value in defaults.items())
+        for symbol, values in zip(base.system.parameters, self._params):
+            base.system.check_assumptions(symbol, values)
 
     @property
     def shape(self) -> tuple:

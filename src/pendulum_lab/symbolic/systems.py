@@ -524,6 +524,21 @@ class MechanicalSystem:
         mass = self.mass_matrix
         return all(sp.factor(mass[:k, :k].det()).is_positive for k in range(1, self.n + 1))
 
+    @staticmethod
+    def check_assumptions(symbol: sp.Symbol, value) -> None:
+        """Refuse a value (a number, or an array of them: every entry) that breaks what
+        ``symbol`` is declared to be (``positive``, ``nonnegative``, ...)."""
+        import numpy as np
+
+        value = np.asarray(value, dtype=float)
+        for assumption, holds in (("positive", value > 0), ("nonnegative", value >= 0),
+                                  ("negative", value < 0), ("nonpositive", value <= 0),
+                                  ("nonzero", value != 0)):
+            if symbol.assumptions0.get(assumption) and not np.all(holds):
+                wrong = value[~holds] if value.ndim else value
+                raise ValueError(f"`{symbol}` must be {assumption.replace('non', 'non-')} "
+                                 f"(it is declared {assumption}), got {np.ravel(wrong)[0]:g}")
+
     def check_values(self, values: dict) -> None:
         """Refuse parameter values (``{symbol: float}``, all parameters) that break a declared
         assumption (a ``positive`` symbol at 0), give a mass that is negative, or a mass matrix
@@ -531,13 +546,7 @@ class MechanicalSystem:
         import numpy as np
 
         for symbol in self.parameters:
-            value = values[symbol]
-            for assumption, holds in (("positive", value > 0), ("nonnegative", value >= 0),
-                                      ("negative", value < 0), ("nonpositive", value <= 0),
-                                      ("nonzero", value != 0)):
-                if symbol.assumptions0.get(assumption) and not holds:
-                    raise ValueError(f"`{symbol}` must be {assumption.replace('non', 'non-')} "
-                                     f"(it is declared {assumption}), got {value:g}")
+            self.check_assumptions(symbol, values[symbol])
         for k, mass in enumerate(self.masses):
             number = float(mass.xreplace(values))
             if not (math.isfinite(number) and number >= 0):
