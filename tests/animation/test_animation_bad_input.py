@@ -6,10 +6,12 @@ naming the argument (or the run) and what is accepted, where they used to give P
 pathlib's or matplotlib's errors, ffmpeg's command line, or hours of drawing.
 """
 
+import dataclasses
 import time
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import pendulum_lab as pl
@@ -20,8 +22,11 @@ DP = pl.double_pendulum()
 RUN = pl.simulate(SP, [1.0], [0.0], t_end=1.0, dt=0.01, method="rk4")
 with warnings.catch_warnings():
     warnings.simplefilter("ignore", RuntimeWarning)
-    BLOWN_UP = pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=100.0, dt=0.9,
-                           method="explicit_euler")
+    STOPPED = pl.simulate(DP, [2.0, 2.5], [0.0, 0.0], t_end=100.0, dt=0.9,
+                          method="explicit_euler")
+# simulate stops a run where its state or its energy leaves the finite numbers (STOPPED ends
+# there, not completed); a run holding a non-finite energy can still be made by hand
+BLOWN_UP = dataclasses.replace(STOPPED, energy=np.append(STOPPED.energy[:-1], np.inf))
 
 
 @pytest.fixture
@@ -84,3 +89,9 @@ def test_the_valid_neighbours_are_written(folder):
                                     max_frames=6).exists()  # an existing file is replaced
     with pytest.raises(ValueError, match="would have 6 frames, more than `max_frames` = 5"):
         animation.save_animation(RUN, SP, folder / "swing.gif", fps=5, dpi=30, max_frames=5)
+
+
+def test_a_run_simulate_stopped_holds_finite_states_and_energies_only():
+    assert not STOPPED.completed
+    assert np.isfinite(STOPPED.theta).all() and np.isfinite(STOPPED.energy).all()
+    assert not np.isfinite(BLOWN_UP.energy).all()  # the hand-made run the exports refuse

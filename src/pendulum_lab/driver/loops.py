@@ -257,10 +257,18 @@ class CompiledMethod:
         per_member = params.shape[0] > 1
 
         def advance(rows):
-            self.run(self.field.separable, rates[rows] if per_member else rates, q[rows],
-                     p[rows], float(t0), float(h), n_steps, first_step, save_every,
-                     params[rows] if per_member else params, saved_q[rows], saved_p[rows],
-                     stats[rows], memory[rows])
+            try:
+                self.run(self.field.separable, rates[rows] if per_member else rates, q[rows],
+                         p[rows], float(t0), float(h), n_steps, first_step, save_every,
+                         params[rows] if per_member else params, saved_q[rows],
+                         saved_p[rows], stats[rows], memory[rows])
+            except ZeroDivisionError:  # compiled code raises it where NumPy would give inf
+                raise ValueError(
+                    f"{self.method.name}: a step of {self.field.name} divided by zero: the "
+                    "state reached a place where its equations are not defined (a singular "
+                    "mass matrix, such as r = 0 of polar coordinates, where the angle is not "
+                    "defined); start elsewhere, or describe the system with coordinates that "
+                    "stay regular along the motion") from None
 
         members, workers = q.shape[0], os.cpu_count() or 1
         if members < PARALLEL_MIN_MEMBERS or workers == 1:

@@ -122,8 +122,10 @@ class Trajectory:
     wall_time : float
         Seconds spent stepping.
     completed : bool
-        False if some trajectory reached a non-finite state (it then stops
-        there; in an ensemble its later entries are NaN).
+        False if some trajectory reached a non-finite state or energy, a system's
+        coordinate too large for a step to move it, or a place where a system's mass matrix
+        is not positive definite (it then stops there, with a ``RuntimeWarning`` saying
+        why; in an ensemble its later entries are NaN).
     compile_time : float
         Seconds the run spent before stepping on compiling its kernels and its time loop, or
         loading them from the disk cache (:mod:`pendulum_lab.codegen.compile_status`); 0 when
@@ -131,6 +133,9 @@ class Trajectory:
     compiled : bool
         True when some of that time was spent compiling (a kernel was in no disk cache);
         False when it was spent loading machine code from the disk cache only.
+    model : PendulumModel or None
+        The model the run integrated (the drawings refuse another system's), None for a
+        trajectory made by hand.
     """
 
     t: np.ndarray
@@ -148,6 +153,7 @@ class Trajectory:
     completed: bool
     compile_time: float = 0.0
     compiled: bool = False
+    model: object = dataclasses.field(default=None, repr=False, compare=False)
 
     @property
     def energy_error(self) -> np.ndarray:
@@ -794,6 +800,61 @@ def simulate(
     return traj if reduction is None else reduction.restored(traj, batch_shape)
 
 
+def unphysical_stop(model, theta, energy, at, batch_shape: tuple):
+    """Where each trajectory of a run must stop although its state is finite, and why; None
+    if none must.
+
+    ``theta`` (shape ``(N, *batch_shape, n)``) and ``energy`` (``(N, *batch_shape)``) are the
+    saved states and energies, ``at`` their times (broadcasting). A trajectory stops at the
+    first saved state that has a non-finite energy (an overflow: the state is finite, its
+    energy is not a number), or where the mass matrix of a system whose positivity is not
+    proved (:attr:`~pendulum_lab.symbolic.systems.MechanicalSystem.positivity_proved`) is not
+    positive definite; and after its start if a coordinate a step cannot move starts there
+    (a system's coordinates are not reduced by whole turns: at 1e17 floats are 16 apart).
+    Returns ``(first, reason)``: ``first`` of shape ``(K,)``, the number of states to keep
+    per member (at least the start; ``N`` for one that goes on), and the reason of the
+    earliest stop.
+    """
+    count = theta.shape[0]
+    flat = theta.reshape(count, -1, theta.shape[-1])
+    energies = np.asarray(energy).reshape(count, -1)
+    finite_state = np.all(np.isfinite(flat), axis=-1)
+    checks = [(~np.isfinite(energies) & finite_state,
+               "its energy is not a finite number (it overflowed: the state is too large for "
+               "floats)")]
+    if not model.periodic_coordinates:
+        largest = np.max(np.abs(flat[0]), axis=-1)
+        coarse = np.spacing(largest) > ANGLE_SPACING_WARNING
+        bad = np.zeros_like(finite_state)
+        bad[1:] = coarse
+        checks.append((bad, f"a coordinate starts at {float(largest.max()):.3g}, where floats "
+                            f"are {float(np.spacing(largest.max())):.3g} apart, so the steps "
+                            "cannot move it (a system's coordinates are not reduced by whole "
+                            "turns); start nearer 0"))
+    if getattr(model, "positivity_proved", True) is False:
+        with np.errstate(all="ignore"):
+            mass = np.asarray(model.mass_matrix_at(theta, t=at)).reshape(count, -1, *(
+                theta.shape[-1],) * 2)
+            usable = np.all(np.isfinite(mass), axis=(-2, -1))
+            lowest = np.full(usable.shape, np.inf)
+            lowest[usable] = np.linalg.eigvalsh(mass[usable])[:, 0]
+            scale = np.where(usable, np.abs(np.where(usable[..., None, None], mass, 0)).max(
+                axis=(-2, -1)), 1.0)
+        checks.append((lowest <= 1e-12 * np.maximum(scale, 1e-300),
+                       "its mass matrix is not positive definite there (the kinetic energy "
+                       "can be negative or zero: not a motion of masses); the Lagrangian's "
+                       "q'^T M q' must stay positive wherever the system goes"))
+    first = np.full(flat.shape[1], count)
+    reason, earliest = None, count
+    for bad, why in checks:
+        bad[0] = False  # the start is kept: a trajectory holds at least one state
+        hit = np.where(bad.any(axis=0), np.argmax(bad, axis=0), count)
+        first = np.minimum(first, hit)
+        if hit.min() < earliest:
+            reason, earliest = why, int(hit.min())
+    return None if reason is None else (first, reason)
+
+
 def check_progress(progress) -> bool | None:
     """``progress`` if it is True, False or None (decide by the length of the run)."""
     if progress is not None and not isinstance(progress, (bool, np.bool_)):
@@ -886,6 +947,27 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     with np.errstate(over="ignore", invalid="ignore"):  # states just before a blow-up
         kinetic = model.kinetic_energy(theta, omega, t=at)
         potential = model.potential_energy(theta, t=at)
+    stop = unphysical_stop(model, theta, kinetic + potential, at, batch_shape)
+    if stop is not None:
+        first, reason = stop
+        completed = False
+        members_stopped = int(np.count_nonzero(first < kept))
+        warnings.warn(
+            f"{method.name}: the run stops at t = "
+            f"{float(times[min(int(first.min()), kept - 1)]):.6g} in {members_stopped} of "
+            f"{members} trajectories: {reason}; "
+            + ("the trajectory stops there." if not batch_shape
+               else "those trajectories hold NaN from there on."),
+            RuntimeWarning, stacklevel=3)
+        if not batch_shape:
+            kept = int(first[0])
+            theta, omega, p = theta[:kept], omega[:kept], p[:kept]
+            kinetic, potential, times = kinetic[:kept], potential[:kept], times[:kept]
+        else:
+            after = (np.arange(kept).reshape(-1, 1) >= first.reshape(1, -1)).reshape(
+                kept, *batch_shape)
+            theta, omega, p = (np.where(after[..., None], np.nan, a) for a in (theta, omega, p))
+            kinetic, potential = (np.where(after, np.nan, a) for a in (kinetic, potential))
     return Trajectory(
         t=times,
         theta=theta,
@@ -900,4 +982,5 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
         evaluations=int(stats[:, CALLS].sum()),
         wall_time=wall,
         completed=completed,
+        model=model,
     )

@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import numbers
 
 import numpy as np
 import sympy as sp
@@ -80,13 +81,17 @@ class SystemModel(PendulumModel):
         if unknown:
             raise ValueError(f"`values` names {unknown}, which are not parameters of "
                              f"{system.name}; its parameters are {list(by_name)}")
-        numbers = dict(system.defaults) | {by_name[str(s)]: v for s, v in given.items()}
+        values = dict(system.defaults) | {by_name[str(s)]: v for s, v in given.items()}
+        if values != system.defaults:  # the constructor checked the defaults
+            system.check_values(values)
+        if period is not None:
+            period = _positive("period", period)
         self.system = self.chain = system
         self.n = system.n
         self.forced = system.forced
         self._fn = compiled_system(system)
-        self._params = tuple(numbers[s] for s in system.parameters)
-        self._period = None if period is None else float(period)
+        self._params = tuple(values[s] for s in system.parameters)
+        self._period = period
         self.start = (np.zeros(self.n) if start is None
                       else check.state_vector("start", start, self.n))
         self.factory = factory
@@ -100,8 +105,9 @@ class SystemModel(PendulumModel):
         raise TypeError(
             f"{self.system.name} is a system given by its points or its Lagrangian, not a chain "
             f"of rods, so it has no `{attribute}`: pl.simulate, pl.step, every method that "
-            "applies, the explorers and the drawings accept it (they read `model.drawing` and "
-            "`model.positions`); the tools written for a chain's rods refuse it")
+            "applies, explore, explore_equilibrium, the simulators and the drawings accept it "
+            "(they read `model.drawing` and `model.positions`); the tools written for a "
+            "chain's rods (explore_energy among them) refuse it")
 
     lengths = property(lambda self: self._chain_only("lengths"))
     masses = property(lambda self: self._chain_only("masses"))
@@ -122,6 +128,13 @@ class SystemModel(PendulumModel):
     @property
     def is_autonomous(self) -> bool:
         return self.system.autonomous
+
+    @property
+    def positivity_proved(self) -> bool:
+        """Whether the mass matrix is proved positive definite wherever the system goes;
+        if not, the simulators check it along each run
+        (:attr:`~pendulum_lab.symbolic.systems.MechanicalSystem.positivity_proved`)."""
+        return self.system.positivity_proved
 
     @property
     def drive_period(self):
@@ -413,6 +426,8 @@ class SystemFamily(FamilyMembers, SystemModel):
         defaults = dict(zip(map(str, base.system.parameters), base._params))
         self._params = tuple(np.array(np.broadcast_to(self.values.get(name, value), shape),
                                       dtype=float) for name, value in defaults.items())
+        for symbol, values in zip(base.system.parameters, self._params):
+            base.system.check_assumptions(symbol, values)
 
     @property
     def shape(self) -> tuple:
@@ -475,8 +490,11 @@ def mechanical_system(coordinates, parameters, *, points=None, masses=None, grav
 
 
 def _positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
-            math.isfinite(value) and value > 0):
+    """``value`` as a float if it is a positive finite real number (NumPy's included)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(f"`{name}` must be a positive finite number, got {value!r} "
+                        f"({type(value).__name__})")
+    if not (math.isfinite(value) and value > 0):
         raise ValueError(f"`{name}` must be a positive finite number, got {value!r}")
     return float(value)
 

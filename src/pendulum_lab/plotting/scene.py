@@ -244,6 +244,7 @@ class PendulumScene:
                     f"`traj` must be one trajectory of this {model.n}-link model, got "
                     f"angles of shape {run.theta.shape}"
                 )
+            require_same_system(run, model)
         trail = check.non_negative_number("trail", trail)
         self.model, self.runs, self.traj = model, runs, runs[0]
         self._positions = [model.positions(run.theta, run.t) for run in runs]
@@ -404,6 +405,31 @@ def encode_frame(canvas: FigureCanvasAgg, image_format: str) -> bytes:
     else:
         image.quantize(colors=64).save(buffer, format="png", compress_level=6)
     return buffer.getvalue()
+
+
+def _system_of(model) -> str:
+    return getattr(model, "name", None) or f"a chain of {model.n} links"
+
+
+def require_same_system(run: Trajectory, model) -> None:
+    """Refuse to draw ``run`` with ``model`` if the run came from another system (the same
+    number of coordinates is not enough: the elastic pendulum's ``(r, theta)`` drawn as the
+    cart pendulum's ``(x, theta)`` would be a wrong picture). Parameter values may differ."""
+    source = run.model
+    if source is None or source is model:
+        return
+    first, second = getattr(source, "system", None), getattr(model, "system", None)
+    if first is None and second is None:
+        same = source.n == model.n
+    elif first is None or second is None:
+        same = False
+    else:
+        same = first is second or (first.name == second.name and first.q == second.q
+                                   and first.lagrangian == second.lagrangian
+                                   and first.points == second.points)
+    if not same:
+        raise ValueError(f"`traj` is a run of {_system_of(source)}, and `model` is "
+                         f"{_system_of(model)}: draw a run with the model it came from")
 
 
 def check_run(traj, model) -> Trajectory:

@@ -672,7 +672,10 @@ def is_identically_zero(expr: sp.Expr) -> bool:
     >>> is_identically_zero(sp.cos(2 * x) - sp.cos(x) ** 2)
     False
     """
-    expr = sp.expand_trig(sp.sympify(expr))
+    if isinstance(expr, str):  # sympify would run it as Python
+        raise TypeError("`expr` must be a SymPy expression, got a string: write it with SymPy "
+                        "symbols (sp.symbols(...))")
+    expr = sp.expand_trig(sp.sympify(expr, strict=True))
     angles = sorted({f.args[0] for f in expr.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
     sines = sp.symbols(f"s0:{len(angles)}")
     cosines = sp.symbols(f"c0:{len(angles)}")

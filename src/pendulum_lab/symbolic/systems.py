@@ -22,8 +22,24 @@ parameters, mass_matrix, dlagrangian_dq, generalized_forces, forcing, forced``, 
 Refused, with a message naming the argument: a Lagrangian that is not a polynomial of
 degree two in the velocities, a mass matrix that is singular (the coordinates of its null
 direction are named: they are redundant) or not positive definite, symbols that are
-neither coordinates, velocities, ``t`` nor declared parameters (named), and parameter
-values that are not real finite numbers.
+neither coordinates, velocities, ``t`` nor declared parameters (named), names that collide
+(a coordinate named ``t``, or like a parameter, or like a generated velocity ``x_dot`` or
+momentum ``p_x``: SymPy would merge them), parameter values that are not real finite
+numbers (or break a parameter's declared assumption, such as ``positive``), masses that are
+not real, finite and non-negative, functions the equations cannot be generated from (named,
+with those accepted: :data:`ACCEPTED_FUNCTIONS`), and descriptions of more than
+:data:`MAX_COORDINATES` coordinates (the derivation would take minutes). A symbol given with
+other assumptions than the declared one of the same name (``Symbol("l")`` beside a
+``positive`` ``l``), or a name in a string, is the declared symbol. Strings are parsed
+without running Python: only numbers, names, arithmetic and the accepted functions.
+
+The mass matrix of points with non-negative masses, ``sum m_k J_k^T J_k``, is positive
+semidefinite by construction. A Lagrangian given directly is proved positive where SymPy
+decides that the leading minors of its mass matrix are positive under the declared
+assumptions; otherwise it is searched for a place where it is not (refused, with the place)
+and, if none is found, :attr:`MechanicalSystem.positivity_proved` is False and the
+simulators check it along each run (a run that reaches such a place stops there, not
+completed, with the reason).
 
 References
 ----------
@@ -33,17 +49,22 @@ References
 
 from __future__ import annotations
 
+import ast
 import functools
+import itertools
 import math
 import numbers
 from dataclasses import dataclass
 
 import sympy as sp
+from sympy.parsing.sympy_parser import parse_expr, standard_transformations
 from sympy.simplify.fu import TR10i
 
 from .mechanics import Equilibrium, derive_chain, hamilton_equations_of, legendre_transform_of
 
 __all__ = [
+    "ACCEPTED_FUNCTIONS",
+    "MAX_COORDINATES",
     "MechanicalSystem",
     "SystemEquilibrium",
     "chain_system",
@@ -52,6 +73,30 @@ __all__ = [
 
 #: Random configurations the mass matrix is checked at (numeric rank and definiteness).
 _CHECK_POINTS = 3
+#: Descriptions with more coordinates are refused: the derivation (expanding and folding the
+#: points' squared velocities, then the Euler-Lagrange equations) grows about 1.5 times per
+#: coordinate. Measured for a chain written as its points (``chain_system(n)``) on a 2-core
+#: machine: 1.0 s for 4 coordinates, 3.9 s for 7, 11.7 s for 9, 17.6 s for 10, 26 s for 11;
+#: 13 would pass a minute. ``pl.n_pendulum`` builds long chains from their closed form.
+MAX_COORDINATES = 12
+#: Derivations expected to take longer than this [s] show a progress bar.
+PROGRESS_AFTER = 1.0
+#: The functions the equations can hold: smooth where defined (the equations need second
+#: derivatives of L), each printed by the code generator. By name, for strings and messages.
+ACCEPTED_FUNCTIONS = {f.__name__: f for f in (
+    sp.sin, sp.cos, sp.tan, sp.sinh, sp.cosh, sp.tanh, sp.exp, sp.log, sp.asin, sp.acos,
+    sp.atan, sp.atan2, sp.sqrt)}
+_ACCEPTED_CLASSES = frozenset(ACCEPTED_FUNCTIONS.values())
+_ACCEPTED_TEXT = (", ".join(ACCEPTED_FUNCTIONS) + ", powers (**) and the constants pi and E")
+#: The nodes a string may hold (checked before SymPy reads it; no attribute, index, call of
+#: anything but an accepted function by name, or literal other than a number).
+_STRING_NODES = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Call, ast.Name, ast.Load,
+                 ast.Constant, ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub,
+                 ast.UAdd)
+#: Search grid of a mass matrix not proved positive: each coordinate (and t) at these
+#: values (positive ones only for a coordinate declared positive).
+_SEARCH_VALUES = (-30.0, -10.0, -3.0, -1.0, -0.3, 0.3, 1.0, 3.0, 10.0, 30.0)
+_SEARCH_POINTS = 4000
 
 
 def _symbol_list(name: str, values) -> list:
@@ -93,12 +138,79 @@ def parameter_values(parameters) -> dict:
     return values
 
 
-def _matrix(name: str, values, n: int) -> sp.Matrix:
-    values = sp.Matrix([sp.sympify(v) for v in values])
-    if values.shape != (n, 1):
-        raise ValueError(f"`{name}` must hold {n} expressions (one per coordinate), got "
-                         f"{values.shape[0]}")
-    return values
+def _sequence(name: str, values, what: str) -> list:
+    """``values`` as a list, refusing a single expression, number or string where a sequence
+    of ``what`` is expected."""
+    if isinstance(values, (str, bytes, sp.Basic, numbers.Number)) or not hasattr(
+            values, "__iter__"):
+        raise TypeError(f"`{name}` must be a sequence of {what}, got {values!r} "
+                        f"({type(values).__name__})")
+    return list(values)
+
+
+def _parse(name: str, text: str, names: dict) -> sp.Expr:
+    """The expression a string writes, read without running Python: numbers, the names in
+    ``names`` (and any other, refused later as undeclared), arithmetic, and calls of the
+    accepted functions by name."""
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError:
+        raise ValueError(f"`{name}` = {text!r} is not an expression (write products with *, "
+                         "powers with **)") from None
+    for node in ast.walk(tree):
+        allowed = isinstance(node, _STRING_NODES) and not (
+            isinstance(node, ast.Constant) and not isinstance(node.value, (int, float)))
+        if isinstance(node, ast.Call):
+            allowed = (isinstance(node.func, ast.Name) and node.func.id in ACCEPTED_FUNCTIONS
+                       and not node.keywords)
+        if isinstance(node, ast.Name) and node.id.startswith("_"):
+            allowed = False
+        if not allowed:
+            raise ValueError(
+                f"`{name}` = {text!r} holds {ast.unparse(node) if node is not tree else text!r}"
+                ", which a description cannot: a string may hold numbers, names of coordinates,"
+                f" velocities, t and parameters, + - * / ** and the functions {_ACCEPTED_TEXT}")
+    local = dict(names) | dict(ACCEPTED_FUNCTIONS) | {"pi": sp.pi, "E": sp.E}
+    return parse_expr(text, local_dict=local, global_dict={"__builtins__": {}, **{
+        k: getattr(sp, k) for k in ("Symbol", "Integer", "Float", "Rational")}},
+        transformations=standard_transformations)
+
+
+def _require_smooth(name: str, expr: sp.Expr) -> None:
+    """Refuse what the equations cannot be generated from: other functions than the accepted
+    ones (named), and numbers that are not real and finite."""
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, (sp.Symbol, sp.Add, sp.Mul, sp.Pow)):
+            continue
+        if node in (sp.pi, sp.E):
+            continue
+        if isinstance(node, sp.Number):
+            if not (node.is_real and node.is_finite):
+                raise ValueError(f"`{name}` holds {node}: numbers must be real and finite")
+            continue
+        if node is sp.I:
+            raise ValueError(f"`{name}` holds {node}: numbers must be real and finite")
+        if isinstance(node, sp.NumberSymbol):
+            raise ValueError(f"`{name}` holds the constant {node}: the constants accepted are "
+                             "pi and E (give another as a number)")
+        if isinstance(node, sp.Function) and node.func in _ACCEPTED_CLASSES:
+            continue
+        what = type(node).__name__ if isinstance(node, sp.Function) else sp.sstr(node)
+        why = ("an undefined function" if isinstance(node, sp.core.function.AppliedUndef)
+               else "not smooth everywhere, or not a function the code generator prints")
+        raise ValueError(
+            f"`{name}` holds {what} ({why}): the equations need the second derivatives of the "
+            f"description, so it may use only {_ACCEPTED_TEXT}")
+
+
+def _progress(items, label: str, expected: float):
+    """``items``, with a progress bar when the work is expected to take over
+    :data:`PROGRESS_AFTER` seconds."""
+    if expected < PROGRESS_AFTER:
+        return items
+    from tqdm.auto import tqdm
+
+    return tqdm(items, desc=label, mininterval=0.5)
 
 
 def _tidy(expr) -> sp.Expr:
@@ -188,6 +300,12 @@ class MechanicalSystem:
                  joints=None, springs=None, name: str = "a mechanical system"):
         self.q = sp.Matrix(_symbol_list("coordinates", coordinates))
         self.n = n = len(self.q)
+        if n > MAX_COORDINATES:
+            raise ValueError(
+                f"`coordinates` holds {n} coordinates: refused beyond {MAX_COORDINATES}, because "
+                "the derivation grows about 1.5 times per coordinate (a chain written as its "
+                "points took 18 s for 10 coordinates and would pass a minute at 13); for a "
+                "chain of pendulums use pl.n_pendulum(n), built from its closed form")
         if velocities is None:
             velocities = [sp.Symbol(f"{qi.name}_dot", real=True) for qi in self.q]
         self.omega = sp.Matrix(_symbol_list("velocities", velocities))
@@ -199,25 +317,26 @@ class MechanicalSystem:
         self.defaults = parameter_values(parameters)
         self.parameters = tuple(self.defaults)
         self.name = name
-        overlap = set(self.parameters) & (set(self.q) | set(self.omega) | {self.t})
-        if overlap:
-            raise ValueError(f"`parameters` must not name coordinates, velocities or t, got "
-                             f"{sorted(map(str, overlap))}")
-        self._time_alias = {sp.Symbol("t"): self.t}
+        self._require_distinct_names()
+        self._declared = {s.name: s for s in (*self.q, *self.omega, *self.parameters, self.t)}
 
         if (lagrangian is None) == (points is None):
             raise TypeError("give exactly one of `points` (with `masses`) and `lagrangian`")
         if points is not None:
-            points = [tuple(self._expr(f"points[{i}]", c) for c in point)
-                      for i, point in enumerate(points)]
-            if any(len(point) != 2 for point in points):
-                raise ValueError("`points` must hold (x, y) pairs")
-            if masses is None or len(masses) != len(points):
+            points = [self._point(i, point) for i, point in
+                      enumerate(_sequence("points", points, "(x, y) pairs"))]
+            masses = [] if masses is None else _sequence("masses", masses, "masses")
+            if len(masses) != len(points):
                 raise ValueError(f"`masses` must hold one mass per point ({len(points)})")
             self.points = points
-            self.masses = [self._expr(f"masses[{i}]", m) for i, m in enumerate(masses)]
+            self.masses = [self._mass(i, m) for i, m in enumerate(masses)]
+            expected = 0.05 * 1.5 ** max(0, max(
+                len(c.free_symbols & set(self.q)) for point in points for c in point))
             kinetic = sp.Add(*(m * _tidy(self._rate(x) ** 2 + self._rate(y) ** 2) / 2
-                               for m, (x, y) in zip(self.masses, points)))
+                               for m, (x, y) in _progress(
+                                   list(zip(self.masses, points)),
+                                   f"kinetic energy of {name} (point by point)",
+                                   expected * len(points))))
             weight = 0 if gravity is None else self._expr("gravity", gravity)
             potential = self._expr("potential", potential)
             potential += sp.Add(*(m * weight * y for m, (_, y) in zip(self.masses, points)))
@@ -237,22 +356,56 @@ class MechanicalSystem:
         self.joints = self._pairs("joints", joints)
         self.springs = self._pairs("springs", springs)
         self.dissipation = self._expr("dissipation", dissipation)
-        extra = sp.zeros(n, 1) if forces is None else _matrix("forces", forces, n)
-        extra = extra.applyfunc(lambda e: self._expr("forces", e))
+        if forces is None:
+            extra = sp.zeros(n, 1)
+        else:
+            forces = _sequence("forces", forces, "expressions, one per coordinate")
+            if len(forces) != n:
+                raise ValueError(f"`forces` must hold {n} expressions (one per coordinate), "
+                                 f"got {len(forces)}")
+            extra = sp.Matrix([self._expr(f"forces[{i}]", f) for i, f in enumerate(forces)])
         self.generalized_forces = (extra - sp.Matrix([self.dissipation.diff(w)
                                                       for w in self.omega])).applyfunc(sp.expand)
         self.forced = any(f != 0 for f in self.generalized_forces)
         self._require_quadratic()
-        self._check_mass_matrix()
+        self.positivity_proved = self._prove_positive()
+        self.check_values(self.defaults)
 
     # ---- input -------------------------------------------------------------------
+    def _require_distinct_names(self) -> None:
+        """Refuse two roles under one name: SymPy and the generated code would merge them
+        (a coordinate ``p_a`` beside ``a``, whose momentum is ``p_a``; a parameter ``t``)."""
+        roles = [("t", "the time")]
+        roles += [(qi.name, f"coordinate {qi.name}") for qi in self.q]
+        roles += [(w.name, f"the velocity of {qi.name}") for qi, w in zip(self.q, self.omega)]
+        roles += [(p.name, f"the momentum of {qi.name}") for qi, p in zip(self.q, self.p)]
+        roles += [(s.name, f"parameter {s.name}") for s in self.parameters]
+        for (first, role), (second, other) in itertools.combinations(roles, 2):
+            if first == second:
+                raise ValueError(
+                    f"the name {first!r} is both {role} and {other}: SymPy would take them for "
+                    "one symbol and the equations would be wrong; rename "
+                    f"{'the coordinate or parameter' if role == 'the time' else 'one of them'}"
+                    " (a coordinate x has the velocity x_dot and the momentum p_x)")
+
     def _expr(self, name: str, value) -> sp.Expr:
-        """``value`` as a SymPy expression of declared symbols only."""
-        try:
-            expr = sp.sympify(value)
-        except (sp.SympifyError, TypeError):
-            raise TypeError(f"`{name}` must be a SymPy expression, got {value!r}") from None
-        expr = expr.xreplace(self._time_alias)
+        """``value`` as a SymPy expression of declared symbols only.
+
+        A symbol named like a declared one (with other assumptions, or from a string) is the
+        declared one."""
+        if isinstance(value, str):
+            expr = _parse(name, value, self._declared)
+        else:
+            try:
+                expr = sp.sympify(value, strict=True)
+            except (sp.SympifyError, TypeError):
+                raise TypeError(f"`{name}` must be a SymPy expression or a number, got "
+                                f"{value!r} ({type(value).__name__})") from None
+        if not isinstance(expr, sp.Expr):
+            raise TypeError(f"`{name}` must be a SymPy expression or a number, got {value!r} "
+                            f"({type(value).__name__})")
+        expr = expr.xreplace({s: self._declared[s.name] for s in expr.free_symbols
+                              if isinstance(s, sp.Symbol) and s.name in self._declared})
         known = set(self.q) | set(self.omega) | set(self.parameters) | {self.t}
         unknown = expr.free_symbols - known
         if unknown:
@@ -262,6 +415,34 @@ class MechanicalSystem:
                 f"({', '.join(map(str, self.q))}), a velocity, t, nor a declared parameter "
                 f"({', '.join(map(str, self.parameters)) or 'none'}): declare "
                 f"{'it' if len(unknown) == 1 else 'them'} in `parameters` with a default value")
+        _require_smooth(name, expr)
+        return expr
+
+    def _point(self, index: int, point) -> tuple:
+        """Point ``index`` as an ``(x, y)`` pair of expressions."""
+        name = f"points[{index}]"
+        if isinstance(point, (str, sp.Basic, numbers.Number)) or not hasattr(point, "__len__"):
+            raise TypeError(f"`{name}` must be an (x, y) pair of expressions, got {point!r}: "
+                            "write points=[(x0, y0), (x1, y1), ...], one pair per point")
+        if len(point) != 2:
+            raise ValueError(f"`{name}` must be an (x, y) pair (points move in a plane), got "
+                             f"{len(point)} entries")
+        return tuple(self._expr(name, c) for c in point)
+
+    def _mass(self, index: int, mass) -> sp.Expr:
+        """Mass ``index``: a real, finite, non-negative number or expression of parameters."""
+        name = f"masses[{index}]"
+        if isinstance(mass, numbers.Number) and not isinstance(mass, numbers.Real):
+            raise ValueError(f"`{name}` must be a real mass, got {mass!r}")
+        if isinstance(mass, numbers.Real) and not isinstance(mass, bool) and not math.isfinite(
+                float(mass)):
+            raise ValueError(f"`{name}` must be a finite mass, got {mass!r}")
+        expr = self._expr(name, mass)
+        if expr.free_symbols & (set(self.q) | set(self.omega) | {self.t}):
+            raise ValueError(f"`{name}` = {expr} must be a number or an expression of "
+                             "parameters: a mass does not change with the motion")
+        if expr.is_negative:
+            raise ValueError(f"`{name}` = {expr} must be non-negative")
         return expr
 
     def _pairs(self, name: str, pairs) -> list[tuple[int, int]]:
@@ -302,26 +483,92 @@ class MechanicalSystem:
                 f"({', '.join(map(str, self.omega))}), got degree {poly.total_degree()}: the "
                 "Legendre transform p = dL/dq' must be solvable for q' as a linear system")
 
-    def _check_mass_matrix(self) -> None:
-        """Refuse a mass matrix that is singular or not positive definite (at random points)."""
-        import random
-
+    @functools.cached_property
+    def _mass_function(self):
+        """``M`` as a NumPy function of ``(q, t, parameters)``, each entry broadcast."""
         import numpy as np
 
+        entries = sp.lambdify((*self.q, self.t, *self.parameters), list(self.mass_matrix),
+                              modules="numpy", cse=True)
+        n = self.n
+
+        def mass(q, t, params):
+            values = entries(*np.moveaxis(q, -1, 0), t, *params)
+            shape = np.broadcast_shapes(*(np.shape(v) for v in values), np.shape(q)[:-1],
+                                        np.shape(t))
+            stacked = np.stack([np.broadcast_to(np.asarray(v, dtype=float), shape)
+                                for v in values], axis=-1)
+            return stacked.reshape(*shape, n, n)
+
+        return mass
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_mass_function", None)  # a lambdified function: made again when used
+        return state
+
+    def _prove_positive(self) -> bool:
+        """Whether ``M`` is positive semidefinite everywhere, proved symbolically.
+
+        Points: ``M = sum_k m_k J_k^T J_k`` with the masses non-negative (checked, here and at
+        every model's values) is positive semidefinite by construction. A Lagrangian given
+        directly: if SymPy decides that every leading minor is positive under the declared
+        assumptions of the coordinates and parameters (Sylvester's criterion; tried up to
+        three coordinates, the determinants grow like n!). Otherwise False: the numeric checks
+        (:meth:`check_values`, and the simulators along each run) stand in.
+        """
+        if self.points:
+            return True
+        if self.n > 3:
+            return False
+        mass = self.mass_matrix
+        return all(sp.factor(mass[:k, :k].det()).is_positive for k in range(1, self.n + 1))
+
+    @staticmethod
+    def check_assumptions(symbol: sp.Symbol, value) -> None:
+        """Refuse a value (a number, or an array of them: every entry) that breaks what
+        ``symbol`` is declared to be (``positive``, ``nonnegative``, ...)."""
+        import numpy as np
+
+        value = np.asarray(value, dtype=float)
+        for assumption, holds in (("positive", value > 0), ("nonnegative", value >= 0),
+                                  ("negative", value < 0), ("nonpositive", value <= 0),
+                                  ("nonzero", value != 0)):
+            if symbol.assumptions0.get(assumption) and not np.all(holds):
+                wrong = value[~holds] if value.ndim else value
+                raise ValueError(f"`{symbol}` must be {assumption.replace('non', 'non-')} "
+                                 f"(it is declared {assumption}), got {np.ravel(wrong)[0]:g}")
+
+    def check_values(self, values: dict) -> None:
+        """Refuse parameter values (``{symbol: float}``, all parameters) that break a declared
+        assumption (a ``positive`` symbol at 0), give a mass that is negative, or a mass matrix
+        that is singular (redundant coordinates) or not positive definite where checked."""
+        import numpy as np
+
+        for symbol in self.parameters:
+            self.check_assumptions(symbol, values[symbol])
+        for k, mass in enumerate(self.masses):
+            number = float(mass.xreplace(values))
+            if not (math.isfinite(number) and number >= 0):
+                raise ValueError(f"`masses[{k}]` = {mass} must be non-negative and finite, "
+                                 f"got {number:g} at these parameter values")
         mass = self.mass_matrix
         if all(e == 0 for e in mass):
             raise ValueError("the mass matrix is zero: the description has no kinetic energy "
                              f"in the velocities ({', '.join(map(str, self.omega))})")
-        numbers_ = dict(self.defaults)
-        rng = random.Random(20261202)
-        for _ in range(_CHECK_POINTS):
-            point = numbers_ | {s: rng.uniform(0.3, 1.3) for s in (*self.q, self.t)}
-            matrix = np.array(mass.xreplace(point).evalf(), dtype=float)
-            values, vectors = np.linalg.eigh(matrix)
-            scale = max(abs(values).max(), 1e-300)
-            if values[0] <= 1e-10 * scale:
+        params = tuple(values[s] for s in self.parameters)
+        rng = np.random.default_rng(20261202)
+        points = rng.uniform(0.3, 1.3, (_CHECK_POINTS, self.n + 1))
+        for point in points:
+            with np.errstate(all="ignore"):
+                matrix = self._mass_function(point[:-1], point[-1], params)
+            if not np.all(np.isfinite(matrix)):
+                continue  # outside the coordinates' domain (log r at r < 0): not checked there
+            values_, vectors = np.linalg.eigh(matrix)
+            scale = max(abs(values_).max(), 1e-300)
+            if values_[0] <= 1e-10 * scale:
                 null = vectors[:, 0]
-                if abs(values[0]) <= 1e-10 * scale:
+                if abs(values_[0]) <= 1e-10 * scale:
                     named = [str(qi) for qi, c in zip(self.q, null) if abs(c) > 1e-6]
                     raise ValueError(
                         f"the mass matrix is singular: the coordinates "
@@ -330,6 +577,44 @@ class MechanicalSystem:
                         "kinetic energy); describe the system with fewer coordinates")
                 raise ValueError("the mass matrix is not positive definite (a kinetic energy "
                                  "that can be negative): check the masses' signs")
+        if not self.positivity_proved:
+            self._search_indefinite(params)
+
+    def _search_indefinite(self, params: tuple) -> None:
+        """Refuse a mass matrix found not positive definite on a grid of states (each
+        coordinate and t among :data:`_SEARCH_VALUES`, positive ones only where declared
+        positive; a random selection of :data:`_SEARCH_POINTS` when the grid is larger)."""
+        import numpy as np
+
+        axes = [[v for v in _SEARCH_VALUES if v > 0] if s.is_positive else list(_SEARCH_VALUES)
+                for s in (*self.q, self.t)]
+        if self.t not in self.mass_matrix.free_symbols:
+            axes[-1] = [0.0]
+        size = math.prod(len(a) for a in axes)
+        if size <= _SEARCH_POINTS:
+            grid = np.array(list(itertools.product(*axes)), dtype=float)
+        else:
+            rng = np.random.default_rng(20261207)
+            grid = np.column_stack([rng.choice(a, _SEARCH_POINTS) for a in axes])
+        with np.errstate(all="ignore"):
+            matrices = self._mass_function(grid[:, :-1], grid[:, -1], params)
+        usable = np.all(np.isfinite(matrices), axis=(-2, -1))
+        if not usable.any():
+            return
+        lowest = np.linalg.eigvalsh(matrices[usable])[:, 0]
+        scale = np.maximum(np.abs(matrices[usable]).max(axis=(-2, -1)), 1e-300)
+        bad = np.flatnonzero(lowest <= 1e-12 * scale)
+        if bad.size:
+            at = grid[usable][bad[0]]
+            depends = self.mass_matrix.free_symbols
+            place = ", ".join(f"{s} = {v:g}" for s, v in zip((*self.q, self.t), at)
+                              if s in depends)
+            raise ValueError(
+                f"the mass matrix is not positive definite at {place} (its smallest "
+                f"eigenvalue there is {lowest[bad[0]]:.3g}): the kinetic energy would be "
+                "negative or zero for some motion. A Lagrangian must have L = 1/2 q'^T M q' + "
+                "... with M positive definite wherever the system goes; declare a coordinate "
+                "positive (sp.Symbol('x', positive=True)) if only positive values are meant")
 
     # ---- the equations -------------------------------------------------------------
     @functools.cached_property

@@ -510,6 +510,12 @@ def explore_energy(
         level), with the reason.
     """
     model = require_model(model)
+    if not model.is_chain:
+        raise TypeError(
+            f"`model` must be a chain: explore_energy measures its energy levels from the "
+            f"hanging chain's depth below the pivot, which {model.name} (a system given by its "
+            "points or its Lagrangian) does not have; explore(model) shows its motion and its "
+            "energy")
     if not energy_is_conserved(model):
         raise ValueError(
             "`model` must have no damping and no drive: explore_energy follows the chain on one "
