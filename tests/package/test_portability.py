@@ -12,9 +12,12 @@ from __future__ import annotations
 import ast
 import ctypes
 import os
+import subprocess
 import sys
 import types
 from pathlib import Path
+
+import pytest
 
 from pendulum_lab import validation
 
@@ -229,3 +232,28 @@ def test_the_install_hint_works_in_every_shell(monkeypatch, capsys):
     assert cli.run_lab(types.SimpleNamespace()) == 1
     hint = capsys.readouterr().err
     assert 'python -m pip install "pendulum_lab[lab]"' in hint and "'" not in hint
+
+
+# ---------------------------------------------------------------- tools/emulate_c_library.py
+@pytest.mark.parametrize("kind", ["without-sincos", "other-library"])
+def test_the_c_library_emulations_take_effect_and_only_with_their_sitecustomize(kind,
+                                                                               tmp_path):
+    sys.path.insert(0, str(REPO / "tools"))
+    try:
+        import emulate_c_library as emulation
+    finally:
+        sys.path.remove(str(REPO / "tools"))
+    reason = emulation.prepare(kind, tmp_path)
+    if reason is not None and kind == "other-library":
+        pytest.skip(reason)  # no C compiler
+    assert reason is None
+    env = os.environ | {"NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+                        "PENDULUM_LAB_CACHE": str(tmp_path / "kernels")}
+
+    def in_effect(path: str) -> bool:
+        return subprocess.run([sys.executable, "-c", emulation.IN_EFFECT[kind]], cwd=REPO,
+                              env=env | {"PYTHONPATH": path}, capture_output=True,
+                              check=False).returncode == 0
+
+    assert in_effect(os.pathsep.join([str(tmp_path), str(REPO / "src")]))
+    assert not in_effect(str(REPO / "src"))  # control: this machine's own C library
