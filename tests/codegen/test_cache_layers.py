@@ -244,6 +244,22 @@ def test_an_unwritable_cache_folder_compiles_in_memory_and_says_where(layers, mo
     forget(module)
 
 
+def test_no_home_folder_compiles_in_memory(layers, monkeypatch):
+    # a service account or a bare container: Path.home() raises
+    monkeypatch.delenv(CACHE_VARIABLE)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+
+    def no_home():
+        raise RuntimeError("Could not determine home directory.")
+
+    monkeypatch.setattr(cache.Path, "home", staticmethod(no_home))
+    assert cache.cache_dir() is None
+    with pytest.warns(KernelCacheWarning, match=f"no home folder.*{CACHE_VARIABLE}"):
+        module, path = load_generated("layer_test", new_source())
+    assert module.triple(1.0) == 3.0 and path is None and counts(module) == (0, 2)
+    forget(module)
+
+
 @contextlib.contextmanager
 def warnings_as_errors():
     import warnings
