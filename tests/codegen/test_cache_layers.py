@@ -244,6 +244,22 @@ def test_an_unwritable_cache_folder_compiles_in_memory_and_says_where(layers, mo
     forget(module)
 
 
+def test_no_home_folder_compiles_in_memory(layers, monkeypatch):
+    # a service account or a bare container: Path.home() raises
+    monkeypatch.delenv(CACHE_VARIABLE)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+
+    def no_home():
+        raise RuntimeError("Could not determine home directory.")
+
+    monkeypatch.setattr(cache.Path, "home", staticmethod(no_home))
+    assert cache.cache_dir() is None
+    with pytest.warns(KernelCacheWarning, match=f"no home folder.*{CACHE_VARIABLE}"):
+        module, path = load_generated("layer_test", new_source())
+    assert module.triple(1.0) == 3.0 and path is None and counts(module) == (0, 2)
+    forget(module)
+
+
 @contextlib.contextmanager
 def warnings_as_errors():
     import warnings
@@ -450,6 +466,7 @@ _COUNTER = textwrap.dedent("""\
     from pendulum_lab.codegen.cache import file_lock
 
     counter, go, locked = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3] == "locked"
+    Path(sys.argv[4]).write_text("ready")  # imported: both start counting together
     while not go.exists():
         time.sleep(0.002)
     for _ in range(25):
@@ -464,9 +481,14 @@ _COUNTER = textwrap.dedent("""\
 
 def _count_in_two_processes(tmp_path, locked: bool) -> int:
     counter, go = tmp_path / f"counter_{locked}", tmp_path / f"go_{locked}"
+    ready = [tmp_path / f"ready_{locked}_{k}" for k in range(2)]
     counter.write_text("0")
     processes = [subprocess.Popen([sys.executable, "-c", _COUNTER, str(counter), str(go),
-                                   "locked" if locked else "free"]) for _ in range(2)]
+                                   "locked" if locked else "free", str(ready[k])])
+                 for k in range(2)]
+    deadline = time.monotonic() + 300
+    while not all(path.exists() for path in ready) and time.monotonic() < deadline:
+        time.sleep(0.01)
     go.write_text("go")
     for process in processes:
         assert process.wait(timeout=300) == 0
