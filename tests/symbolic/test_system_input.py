@@ -82,7 +82,8 @@ def test_a_symbol_with_other_assumptions_or_a_string_is_the_declared_symbol():
 
 # ---- strings ---------------------------------------------------------------------------------
 @pytest.mark.parametrize("text", ["__import__('os').getcwd()", "().__class__", "m.func",
-                                  "[m][0]", "lambda: 1", "getattr(m, 'func')", "'m'"])
+                                  "[m][0]", "lambda: 1", "getattr(m, 'func')", "'m'",
+                                  "9**9**9**9", "theta**(2**1000)"])
 def test_a_string_is_read_without_running_python(monkeypatch, text):
     called = []
     monkeypatch.setattr(os, "getcwd", lambda: called.append(True) or "/")
@@ -92,9 +93,10 @@ def test_a_string_is_read_without_running_python(monkeypatch, text):
 
 
 def test_a_string_of_arithmetic_and_accepted_functions_is_read():
-    system = pendulum(potential="m*g*l*(1 - cos(theta))**2/2 + exp(-theta**2) + pi")
+    system = pendulum(potential="m*g*l*(1 - cos(theta))**2/2 + exp(-theta**2) + pi "
+                                "+ theta**-2.5 + 2**theta")
     expected = pendulum(potential=m * g * l * (1 - sp.cos(th)) ** 2 / 2 + sp.exp(-th ** 2)
-                        + sp.pi)
+                        + sp.pi + th ** -2.5 + 2**th)
     assert system.potential == expected.potential
     # negative control: implicit multiplication is not Python, and is refused with a hint
     with pytest.raises(ValueError, match="is not an expression \\(write products with \\*"):

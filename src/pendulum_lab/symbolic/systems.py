@@ -74,10 +74,13 @@ __all__ = [
 #: Random configurations the mass matrix is checked at (numeric rank and definiteness).
 _CHECK_POINTS = 3
 #: Descriptions with more coordinates are refused: the derivation (expanding and folding the
-#: points' squared velocities, then the Euler-Lagrange equations) grows about 1.5 times per
-#: coordinate. Measured for a chain written as its points (``chain_system(n)``) on a 2-core
-#: machine: 1.0 s for 4 coordinates, 3.9 s for 7, 11.7 s for 9, 17.6 s for 10, 26 s for 11;
-#: 13 would pass a minute. ``pl.n_pendulum`` builds long chains from their closed form.
+#: points' squared velocities, then the Euler-Lagrange equations) grows 1.3 to 1.5 times per
+#: coordinate. Measured for a chain written as its points (``chain_system(n)``, the worst
+#: common case: each point moves with all the coordinates before it) on a 2-core machine
+#: shared with other work (load about 11): CPU time 2.1 s for 6 coordinates, 3.9 s for 8,
+#: 8.8 s for 10, 12.8 s for 11, 16.3 s for 12 (91 s of wall time). An idle core would pass a
+#: minute at about 16, a shared hub already at 12; the kernels generated from the equations
+#: grow with them. ``pl.n_pendulum`` builds long chains from their closed form.
 MAX_COORDINATES = 12
 #: Derivations expected to take longer than this [s] show a progress bar.
 PROGRESS_AFTER = 1.0
@@ -93,6 +96,8 @@ _ACCEPTED_TEXT = (", ".join(ACCEPTED_FUNCTIONS) + ", powers (**) and the constan
 _STRING_NODES = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Call, ast.Name, ast.Load,
                  ast.Constant, ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub,
                  ast.UAdd)
+#: The largest number a string may raise to a power (a larger one could take SymPy forever).
+_LARGEST_EXPONENT = 100
 #: Search grid of a mass matrix not proved positive: each coordinate (and t) at these
 #: values (positive ones only for a coordinate declared positive).
 _SEARCH_VALUES = (-30.0, -10.0, -3.0, -1.0, -0.3, 0.3, 1.0, 3.0, 10.0, 30.0)
@@ -165,6 +170,13 @@ def _parse(name: str, text: str, names: dict) -> sp.Expr:
                        and not node.keywords)
         if isinstance(node, ast.Name) and node.id.startswith("_"):
             allowed = False
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow) and not any(
+                isinstance(inner, ast.Name) for inner in ast.walk(node.right)):
+            # SymPy computes a power of whole numbers exactly: 9**9**9 would not end
+            exponent = node.right.operand if isinstance(node.right, ast.UnaryOp) else node.right
+            allowed = (isinstance(exponent, ast.Constant)
+                       and isinstance(exponent.value, (int, float))
+                       and abs(exponent.value) <= _LARGEST_EXPONENT)
         if not allowed:
             raise ValueError(
                 f"`{name}` = {text!r} holds {ast.unparse(node) if node is not tree else text!r}"
@@ -303,9 +315,10 @@ class MechanicalSystem:
         if n > MAX_COORDINATES:
             raise ValueError(
                 f"`coordinates` holds {n} coordinates: refused beyond {MAX_COORDINATES}, because "
-                "the derivation grows about 1.5 times per coordinate (a chain written as its "
-                "points took 18 s for 10 coordinates and would pass a minute at 13); for a "
-                "chain of pendulums use pl.n_pendulum(n), built from its closed form")
+                "the derivation grows about 1.4 times per coordinate (a chain written as its "
+                "points took 16 s of CPU time for 12 coordinates, and over a minute on a "
+                "shared machine); for a chain of pendulums use pl.n_pendulum(n), built from "
+                "its closed form")
         if velocities is None:
             velocities = [sp.Symbol(f"{qi.name}_dot", real=True) for qi in self.q]
         self.omega = sp.Matrix(_symbol_list("velocities", velocities))
