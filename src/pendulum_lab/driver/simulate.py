@@ -111,7 +111,17 @@ class Trajectory:
     theta, omega, p : ndarray, shape (N+1, ..., n)
         Angles, angular velocities and canonical momenta (``...`` is the
         ensemble shape of the initial state, empty for one trajectory).
-    kinetic, potential, energy : ndarray, shape (N+1, ...)
+    kinetic, potential : ndarray, shape (N+1, ...)
+        ``T`` and ``V`` [J] (for a moving pivot, ``T`` in the fixed frame).
+    energy : ndarray, shape (N+1, ...)
+        The mechanical energy ``T + V`` [J]. Where the pivot moves (the Kapitza
+        pendulum) this is not the Hamiltonian, and neither is conserved.
+    hamiltonian : ndarray, shape (N+1, ...)
+        ``H(q, p, t) = p q' - L`` [J], the function whose Hamilton equations the run
+        integrates: ``dH/dt = dH/dt|_(q, p)`` along the motion (constant if nothing depends
+        on ``t``, and without damping). The same array as ``energy`` where ``H = T + V``
+        (``model.hamiltonian_is_energy``: every chain, a system whose points the time does
+        not move); for a moving pivot ``H = T + V - b q' - 2 T_0``.
     method : Method
     dt : float
     mean_iterations : float
@@ -137,6 +147,7 @@ class Trajectory:
     kinetic: np.ndarray
     potential: np.ndarray
     energy: np.ndarray
+    hamiltonian: np.ndarray
     method: Method
     dt: float
     mean_iterations: float
@@ -147,7 +158,7 @@ class Trajectory:
 
     @property
     def energy_error(self) -> np.ndarray:
-        """``E(t) - E(0)``."""
+        """``E(t) - E(0)`` of the mechanical energy ``E = T + V`` (:attr:`energy`)."""
         return self.energy - self.energy[0]
 
     @property
@@ -881,6 +892,9 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     with np.errstate(over="ignore", invalid="ignore"):  # states just before a blow-up
         kinetic = model.kinetic_energy(theta, omega, t=at)
         potential = model.potential_energy(theta, t=at)
+        energy = kinetic + potential
+        hamiltonian = (energy if model.hamiltonian_is_energy
+                       else model.hamiltonian_value(theta, p, t=at))
     return Trajectory(
         t=times,
         theta=theta,
@@ -888,7 +902,8 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
         p=p,
         kinetic=kinetic,
         potential=potential,
-        energy=kinetic + potential,
+        energy=energy,
+        hamiltonian=hamiltonian,
         method=method,
         dt=dt,
         mean_iterations=float(stats[:, SWEEPS].sum() / max(stats[:, STEPS].sum(), 1)),

@@ -386,6 +386,42 @@ class MechanicalSystem:
                 clock |= {str(s) for s in term.free_symbols - {self.t}}
         return tuple(str(s) for s in self.parameters if str(s) in clock)
 
+    @functools.cached_property
+    def period(self) -> sp.Expr | None:
+        """The period of the time dependence as an expression of the parameters
+        (``2*pi/w`` for the Kapitza pendulum), or None: autonomous, or not periodic in ``t``
+        in a way found here (each function of ``t`` periodic, their periods in rational
+        ratios, ``t`` nowhere else).
+
+        Examples
+        --------
+        >>> th, t = sp.symbols("theta t", real=True)
+        >>> w, l = sp.symbols("w l", positive=True)
+        >>> s = MechanicalSystem([th], {w: 10.0, l: 1.0}, masses=[1], gravity=9.81,
+        ...                      points=[(l * sp.sin(th), sp.cos(w * t) + sp.sin(3 * w * t / 2)
+        ...                               - l * sp.cos(th))])
+        >>> s.period
+        4*pi/w
+        """
+        from sympy.calculus.util import periodicity
+
+        if self.autonomous:
+            return None
+        timed = {f for e in self._dynamics for f in e.atoms(sp.Function)
+                 if self.t in f.free_symbols}
+        stand_ins = {f: sp.Dummy() for f in timed}
+        if any(self.t in e.xreplace(stand_ins).free_symbols for e in self._dynamics):
+            return None  # t outside a function (a ramp, a polynomial in t)
+        periods = [periodicity(f, self.t) for f in timed]
+        if not periods or any(p is None or p == 0 for p in periods):
+            return None
+        base = periods[0]
+        multiples = [sp.nsimplify(sp.simplify(p / base)) for p in periods]
+        if any(not (m.is_Rational and m > 0) for m in multiples):
+            return None  # incommensurate periods: no common period
+        return sp.simplify(base * math.lcm(*(int(m.p) for m in multiples))
+                           / math.gcd(*(int(m.q) for m in multiples)))
+
     @property
     def separable(self) -> bool:
         """``H = T(p) + V(q)``: ``M`` constant, ``b = 0``, no time in the kinetic energy."""
