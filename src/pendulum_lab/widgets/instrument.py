@@ -40,7 +40,7 @@ from ..driver.simulate import Trajectory, step_count
 from ..integrators import ConvergenceError
 from ..model.pendulum import PendulumModel
 from ..plotting.png import png_bytes
-from .calls import SimulateCall
+from .calls import SimulateCall, panels_code
 from .controls import column, energy_is_conserved, forces_text
 from .status import StatusLine
 
@@ -263,8 +263,14 @@ class Instrument(WidgetWithPicture):
             yield
 
     def code(self) -> str:
-        """Source that computes the trajectory shown (``""`` before the first run)."""
-        return "" if self.call is None else self.call.code()
+        """Source that computes the trajectory shown and draws it (``""`` before the first
+        run)."""
+        return "" if self.call is None else self.call.code(self.drawing_code())
+
+    def drawing_code(self) -> str:
+        """Source that draws ``traj`` of ``model`` as this instrument's picture does (for
+        "copy as code"): the configuration and the energies, as the simulators show them."""
+        return panels_code(["pendulum", "energy"])
 
     def set_controls(self, values: Mapping[str, object]) -> bool:
         """Set several controls at once and recompute once; return whether the update succeeded.
@@ -332,7 +338,7 @@ class Instrument(WidgetWithPicture):
         except EXPECTED_ERRORS as err:
             self.set_message(f"Could not show the run: {err}", "error")
             return False
-        self.status.code = call.code()
+        self.status.code = self.code()
         # The driver's own warning (a blow-up) says what happened; NumPy's
         # "overflow encountered in ..." that may follow it adds nothing.
         notes = list(
