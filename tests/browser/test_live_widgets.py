@@ -305,6 +305,37 @@ def test_the_explorer_is_keyboard_operable_and_announces_each_run(page):
     assert page.evaluate(active_cell) == cell_before  # the key stayed with the slider
 
 
+def test_a_step_typed_into_the_box_reruns_the_explorer(page):
+    explorer = page.locator(".jp-Cell").filter(has=page.locator(".widget-image")).last
+    explorer.scroll_into_view_if_needed()
+    status = explorer.locator(".plab-statusline .plab-status-text").first
+    box = explorer.locator(".plab-step-box input").first
+    before = status.text_content()
+    assert "dt = 0.01 s" in before
+    box.click()
+    page.keyboard.press("ControlOrMeta+a")
+    page.keyboard.type("0.005")
+    page.keyboard.press("Enter")
+    page.wait_for_function(
+        "([s, b]) => s.textContent !== b && !s.closest('.plab-statusline').dataset.kind"
+        ".startsWith('busy')", arg=[status.element_handle(), before], timeout=30_000)
+    text = status.text_content()
+    assert "dt = 0.005 s" in text and "steps of rk4" in text, text
+    assert float(box.input_value()) == 0.005  # the box shows the step that ran
+    ran = json.loads(kernel_output(page, "import json; print(json.dumps(ex.trajectory.dt))"))
+    assert ran == 0.005
+    # negative control: a step typed but not committed (no Enter, no blur) runs nothing
+    box.click()
+    page.keyboard.press("ControlOrMeta+a")
+    page.keyboard.type("0.02")
+    page.wait_for_timeout(1500)
+    assert json.loads(kernel_output(page, "import json; print(json.dumps(ex.trajectory.dt))")
+                      ) == 0.005
+    page.keyboard.press("Enter")
+    page.wait_for_function("(s) => s.textContent.includes('dt = 0.02 s')",
+                           arg=status.element_handle(), timeout=30_000)
+
+
 def drag_bob(page, bob: int, to: tuple[float, float]) -> float:
     """Drag bob ``bob`` (0-based) of the paused simulator to canvas pixel ``to``; return the
     angle from the arm's joint to the release point the widget reported (``data-release``, in
