@@ -155,6 +155,11 @@ class MechanicalSystem:
         Further generalized forces ``Q(q, q', t)``, one per coordinate.
     joints : sequence of (i, j) pairs, optional
         Points drawn joined by a rod (point indices; ``-1`` is the origin); for drawings only.
+        When neither ``joints`` nor ``springs`` is given, they are read from the points: a
+        point at a fixed distance from an earlier point or the origin hangs from it; one at a
+        fixed distance from a place that only the time moves (a shaken pivot) hangs from
+        that place, added to ``points`` as a massless point. Give ``joints=[]`` to draw no
+        rod.
     springs : sequence of (i, j) pairs, optional
         Points drawn joined by a spring (as ``joints``); for drawings only.
     name : str
@@ -236,6 +241,8 @@ class MechanicalSystem:
             self.potential = -rest
         self.joints = self._pairs("joints", joints)
         self.springs = self._pairs("springs", springs)
+        if joints is None and springs is None and self.points:
+            self._infer_suspension()
         self.dissipation = self._expr("dissipation", dissipation)
         extra = sp.zeros(n, 1) if forces is None else _matrix("forces", forces, n)
         extra = extra.applyfunc(lambda e: self._expr("forces", e))
@@ -279,6 +286,35 @@ class MechanicalSystem:
                     f"{len(self.points) - 1} (or -1, the origin)")
             found.append((i, j))
         return found
+
+    def _infer_suspension(self) -> None:
+        """Rods for the drawing, when neither ``joints`` nor ``springs`` were given: a point
+        kept at a fixed distance from an earlier point, or else from the origin, hangs from
+        it on a rod; one kept at a fixed distance from the place its position gives at
+        ``q = 0`` terms only (the part of it the coordinates do not move, such as a shaken
+        pivot's ``a cos(w t)``) hangs from that place, added as a massless point after the
+        given ones (so that a pendulum whose pivot moves is drawn with its rod and pivot)."""
+        moved = set(self.q)
+
+        def fixed_distance(dx, dy) -> bool:
+            if not (sp.sympify(dx).free_symbols | sp.sympify(dy).free_symbols) & moved:
+                return False  # nothing between them moves: not an arm
+            square = sp.trigsimp(sp.expand(dx ** 2 + dy ** 2))
+            return square != 0 and not square.free_symbols & moved
+
+        given = list(self.points)
+        for k, (x, y) in enumerate(given):
+            anchors = [(j, given[j]) for j in range(k)] + [(-1, (0, 0))]
+            hung = next((j for j, (ax, ay) in anchors if fixed_distance(x - ax, y - ay)), None)
+            if hung is not None:
+                self.joints.append((hung, k))
+                continue
+            pivot = tuple(sp.Add(*(term for term in sp.Add.make_args(sp.expand(c))
+                                   if not term.free_symbols & moved)) for c in (x, y))
+            if any(c != 0 for c in pivot) and fixed_distance(x - pivot[0], y - pivot[1]):
+                self.points.append(pivot)
+                self.masses.append(sp.Integer(0))
+                self.joints.append((len(self.points) - 1, k))
 
     def _rate(self, expr) -> sp.Expr:
         """``d expr / dt`` along a motion: ``sum dexpr/dq_i q'_i + dexpr/dt``."""
