@@ -47,6 +47,7 @@ __all__ = [
     "check_steps",
     "column",
     "control_names",
+    "energy_changers",
     "energy_is_conserved",
     "forces_text",
     "methods_for",
@@ -295,6 +296,39 @@ def energy_is_conserved(model: PendulumModel) -> bool:
     return model.is_conservative and model.is_autonomous
 
 
+def _system_time_dependence(model) -> tuple[bool, bool]:
+    """Whether a system's points move with the time (its Lagrangian reads ``t``), and
+    whether its generalized forces read ``t`` (a drive)."""
+    system, t = model.system, model.system.t
+    return (t in system.lagrangian.free_symbols,
+            any(t in force.free_symbols for force in system.generalized_forces))
+
+
+def energy_changers(model: PendulumModel) -> str:
+    """What changes the model's energy, in words (``"the damping and the drive"``, ``"the
+    moving point"``: a point the time moves, such as a shaken pivot), or ``""`` for a model
+    that conserves it.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> energy_changers(pl.driven_pendulum()), energy_changers(pl.kapitza_pendulum())
+    ('the damping and the drive', 'the moving point')
+    >>> energy_changers(pl.double_pendulum())
+    ''
+    """
+    if model.is_chain:
+        parts = [name for name, present in (("the damping", not model.is_conservative),
+                                             ("the drive", not model.is_autonomous)) if present]
+    else:
+        moving, driven = _system_time_dependence(model)
+        parts = [name for name, present in (
+            ("the moving point", moving),
+            ("the time-dependent forces" if driven else "the forces Q", not model.is_conservative),
+        ) if present]
+    return " and ".join(parts)
+
+
 def forces_text(model: PendulumModel) -> str:
     """The model's damping and drive in words, with units (``"no damping, no drive"``).
 
@@ -304,14 +338,20 @@ def forces_text(model: PendulumModel) -> str:
     >>> forces_text(pl.driven_pendulum())
     'damping 0.5 N m s/rad, drive 1.2 cos(0.6667 t) N m'
     >>> forces_text(pl.kapitza_pendulum())
-    'no forces besides the potential, depends on t (period 0.06283 s)'
+    'no damping or applied forces, a point moved with the time (period 0.06283 s)'
+    >>> forces_text(pl.elastic_pendulum())
+    'no damping or applied forces'
     """
     if not model.is_chain:
-        parts = ["no forces besides the potential" if model.is_conservative
+        moving, driven = _system_time_dependence(model)
+        parts = ["no damping or applied forces" if model.is_conservative
                  else f"forces {model.damping}"]
-        if not model.is_autonomous:
-            period = model.drive_period
-            parts.append("depends on t" + ("" if period is None else f" (period {period:.4g} s)"))
+        period = model.drive_period
+        every = "" if period is None else f" (period {period:.4g} s)"
+        if moving:
+            parts.append("a point moved with the time" + every)
+        elif driven:
+            parts.append("forces that depend on t" + every)
         return ", ".join(parts)
     coefficients = {float(c) for c in model.damping}
     if model.is_conservative:

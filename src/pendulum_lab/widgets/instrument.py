@@ -41,7 +41,7 @@ from ..integrators import ConvergenceError
 from ..model.pendulum import PendulumModel
 from ..plotting.png import png_bytes
 from .calls import SimulateCall, panels_code
-from .controls import column, energy_is_conserved, forces_text
+from .controls import column, energy_changers, energy_is_conserved, forces_text
 from .status import StatusLine
 
 __all__ = [
@@ -78,6 +78,9 @@ REOPEN_HINT = (
     "</style>"
 )
 
+
+#: CSS class of the row of control columns (``static/live.css`` lets it wrap).
+CONTROLS_CLASS = "plab-controls"
 
 class WidgetWithPicture:
     """Displays as its ``widget``, with a still :meth:`picture` of it in the same display.
@@ -168,7 +171,11 @@ class Instrument(WidgetWithPicture):
             for title, keys in columns
             if keys
         ]
-        children = [widgets.HBox(boxes), self.status]
+        row = widgets.HBox(boxes)
+        # Columns that do not fit beside each other wrap under each other (live.css): five
+        # parameters pushed the last column's controls past the right edge.
+        row.add_class(CONTROLS_CLASS)
+        children = [row, self.status]
         self.figure = self._canvas = self._image = None
         if figure:
             self.figure = Figure(figsize=(WIDTH, ROW_HEIGHT * rows), dpi=DPI)
@@ -210,8 +217,8 @@ class Instrument(WidgetWithPicture):
         largest = float(change[np.argmax(np.abs(np.nan_to_num(change)))])
         return run + (
             f"E − E(0) reached {largest:+.3g} J: energy is not conserved "
-            f"({forces_text(self.model)}), so this is the forces' work plus the method's "
-            "error, not an error alone"
+            f"({forces_text(self.model)}), so this is the work of "
+            f"{energy_changers(self.model)} plus the method's error, not an error alone"
         )
 
     def show(self) -> None:
