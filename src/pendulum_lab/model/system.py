@@ -538,16 +538,16 @@ def readable_number(value: float, digits: int = 6) -> str:
 def _period_rule(system: MechanicalSystem, period, numbers: dict) -> sp.Expr | None:
     """The period as an expression of the parameters (a constant if nothing better is
     known), from ``period`` as :class:`SystemModel` takes it."""
-    own = system.period
     if period is None:
-        return own
-    if isinstance(period, sp.Basic):
+        return system.period
+    if isinstance(period, sp.Basic):  # given as an expression: no need to derive one
         unknown = period.free_symbols - set(system.parameters)
         if unknown:
             raise ValueError(f"`period` uses {sorted(map(str, unknown))}, which are not "
                              f"parameters of {system.name} ({list(map(str, system.parameters))})")
         return period
     value = check.positive_number("period", period)
+    own = system.period
     if own is None:
         return sp.Float(value)
     # The same multiple of the system's own period at any parameter values.
