@@ -35,6 +35,7 @@ from .integrators import (
     Method,
     get_method,
 )
+from .integrators.source import method_source
 from .model import (
     ModelFamily,
     PendulumModel,
@@ -128,6 +129,7 @@ __all__ = [
     "henon_step",
     "kapitza_pendulum",
     "mechanical_system",
+    "method_source",
     "modified_hamiltonian",
     "n_pendulum",
     "simple_pendulum",

@@ -10,9 +10,11 @@ An exercise cell leaves its answer as ``None``; the check cell below it reads::
 
 :meth:`Exercise.report` prints that the exercise is not answered yet, or that every
 requirement holds, or raises :class:`ExerciseNotPassed` listing the hints of the requirements
-that failed. A requirement states a property of a right answer (a bound, an identity, an order),
-so a check tests understanding rather than a copied number, and no message shows the expected
-value.
+that failed. In a notebook the failure shows as two lines, the verdict and the hint, not as a
+traceback into this module (a student who reads a traceback thinks something broke); "run
+all" still stops there, and tests still see the exception. A requirement states a property
+of a right answer (a bound, an identity, an order), so a check tests understanding rather
+than a copied number, and no message shows the expected value.
 """
 
 from __future__ import annotations
@@ -21,7 +23,15 @@ __all__ = ["Exercise", "ExerciseNotPassed"]
 
 
 class ExerciseNotPassed(AssertionError):
-    """An exercise's answer fails one of its requirements (the message holds the hints)."""
+    """An exercise's answer fails one of its requirements (the message holds the hints).
+
+    IPython shows what :meth:`_render_traceback_` returns instead of the traceback: the
+    verdict and the hints, nothing else.
+    """
+
+    def _render_traceback_(self) -> list[str]:
+        verdict, _, hints = str(self).partition(" Hint: ")
+        return [verdict, *(f"Hint: {hint}" for hint in hints.split("; ") if hint)]
 
 
 class Exercise:

@@ -219,7 +219,7 @@ def test_method_source_is_the_reference_step_with_its_helpers(name):
     method = pl.get_method(name)
     step = method.reference
     function = step.func if isinstance(step, functools.partial) else step
-    text = source.method_source(name)
+    text = source.method_source(name, helpers=True)
     own = inspect.getsource(function).rstrip()
     assert text.startswith(own) or text.split("\n", 1)[1].startswith(own)
     if isinstance(step, functools.partial):
@@ -228,7 +228,12 @@ def test_method_source_is_the_reference_step_with_its_helpers(name):
     # the helpers: the fixed-point solver (with the stopping rule) of every implicit method
     solver = "def fixed_point("
     assert (solver in text) is method.implicit  # negative control: explicit ones have none
-    assert solver not in source.method_source(name, helpers=False) or function.__name__ == solver
+    # By default the step alone, then a line naming what it calls (the solver is not the
+    # lesson); the same start as with the helpers.
+    alone = source.method_source(name)
+    assert solver not in alone and text.startswith(alone.rsplit("\n# It calls", 1)[0])
+    assert ("fixed_point, shown by" in alone or "and fixed_point, shown by" in alone) is \
+        method.implicit
     # negative control: not the compiled kernel (that is tested against this, not shown)
     compiled = inspect.getsource(method.kernel.py_func).strip().splitlines()[0]
     assert compiled not in text

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 
 import pytest
-from lab_harness import SCREENSHOTS, NotebookRunner
+from lab_harness import SCREENSHOTS, VIEWPORT, NotebookRunner
 
 pytestmark = pytest.mark.browser
 
@@ -303,6 +303,78 @@ def test_the_explorer_is_keyboard_operable_and_announces_each_run(page):
                                               "ex.trajectory.theta[0, 0])))"))
     assert reported == pytest.approx(2.01, abs=1e-12)
     assert page.evaluate(active_cell) == cell_before  # the key stayed with the slider
+
+
+def test_a_step_typed_into_the_box_reruns_the_explorer(page):
+    explorer = page.locator(".jp-Cell").filter(has=page.locator(".widget-image")).last
+    explorer.scroll_into_view_if_needed()
+    status = explorer.locator(".plab-statusline .plab-status-text").first
+    box = explorer.locator(".plab-step-box input").first
+    before = status.text_content()
+    assert "dt = 0.01 s" in before
+    box.click()
+    page.keyboard.press("ControlOrMeta+a")
+    page.keyboard.type("0.005")
+    page.keyboard.press("Enter")
+    page.wait_for_function(
+        "([s, b]) => s.textContent !== b && !s.closest('.plab-statusline').dataset.kind"
+        ".startsWith('busy')", arg=[status.element_handle(), before], timeout=30_000)
+    text = status.text_content()
+    assert "dt = 0.005 s" in text and "steps of rk4" in text, text
+    assert float(box.input_value()) == 0.005  # the box shows the step that ran
+    ran = json.loads(kernel_output(page, "import json; print(json.dumps(ex.trajectory.dt))"))
+    assert ran == 0.005
+    # negative control: a step typed but not committed (no Enter, no blur) runs nothing
+    box.click()
+    page.keyboard.press("ControlOrMeta+a")
+    page.keyboard.type("0.02")
+    page.wait_for_timeout(1500)
+    assert json.loads(kernel_output(page, "import json; print(json.dumps(ex.trajectory.dt))")
+                      ) == 0.005
+    page.keyboard.press("Enter")
+    page.wait_for_function("(s) => s.textContent.includes('dt = 0.02 s')",
+                           arg=status.element_handle(), timeout=30_000)
+
+
+OVERFLOW_JS = """(cell) => {
+    // How far (CSS pixels) any control of the cell's widget output reaches past the output's
+    // right edge (0: everything inside).
+    const area = cell.querySelector('.jp-OutputArea-output');
+    const right = area.getBoundingClientRect().right;
+    let worst = 0;
+    for (const el of cell.querySelectorAll('.plab-controls .widget-readout, '
+                                          + '.plab-controls select, .plab-controls input')) {
+        const box = el.getBoundingClientRect();
+        if (box.width > 0) worst = Math.max(worst, box.right - right);
+    }
+    return worst;
+}"""
+
+
+def test_a_system_with_five_parameters_keeps_its_controls_inside_the_cell(page):
+    # The Kapitza pendulum (a, w, m, l, g) in the live simulator, the demo's last cell, in a
+    # window as narrow as a laptop's half screen.
+    page.set_viewport_size({"width": 1000, "height": 900})
+    try:
+        cell = page.locator(SIM).last.locator("xpath=ancestor::div[contains(@class,'jp-CodeCell')]")
+        cell.scroll_into_view_if_needed()
+        page.wait_for_timeout(500)
+        SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        cell.screenshot(path=str(SCREENSHOTS / "kapitza-live-controls.png"))
+        assert page.locator(".plab-controls").count() >= 1
+        assert cell.evaluate(OVERFLOW_JS) <= 0.5
+        text = cell.locator(".plab-statusline .plab-status-text").first.text_content()
+        assert "besides the potential" not in text and "the forces' work" not in text, text
+        assert "the work of the moving point" in text, text
+        # negative control: without the wrapping the columns run past the right edge
+        cell.evaluate("(c) => { c.querySelector('.plab-controls').style.flexWrap = 'nowrap'; }")
+        page.wait_for_timeout(300)
+        overflow = cell.evaluate(OVERFLOW_JS)
+        cell.screenshot(path=str(SCREENSHOTS / "kapitza-live-controls-nowrap.png"))
+        cell.evaluate("(c) => { c.querySelector('.plab-controls').style.flexWrap = ''; }")
+        assert overflow > 20
+    finally:
+        page.set_viewport_size(VIEWPORT)
 
 
 def drag_bob(page, bob: int, to: tuple[float, float]) -> float:

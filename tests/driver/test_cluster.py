@@ -93,8 +93,8 @@ def test_bad_clients_and_unregistered_methods_are_refused(client):
 
 def test_bifurcation_diagram_on_the_cluster_is_the_local_diagram(client, monkeypatch):
     # Little memory per segment: the whole batch and a chunk of it would then run in
-    # segments of different lengths, and a driven model's time at a step is rounded
-    # from its segment's start; the chunks must run in the whole batch's segments.
+    # segments of different lengths; the step times count from the run's start, so the
+    # segmentation does not change a bit.
     monkeypatch.setattr(segments, "SEGMENT_FLOATS", 1000)
     model = pl.driven_pendulum()
     values = np.linspace(0.9, 1.5, 7)
@@ -106,7 +106,8 @@ def test_bifurcation_diagram_on_the_cluster_is_the_local_diagram(client, monkeyp
     for name in ("theta", "omega", "periods", "turns"):
         assert np.array_equal(getattr(remote, name), getattr(local, name)), name
     assert len(set(local.periods.ravel().tolist())) > 1  # not a trivial diagram
-    # Negative control: a chunk in segments of its own size is not the same to the bit.
+    # A chunk in segments of its own size is the same to the bit (the drive's times count
+    # from the run's start); negative control: the chunk's neighbours' rows are not.
     family = model.family(drive_amplitude=values)
     rows = np.arange(3)
     own = segments.default_segment_steps(1, 2 * len(rows), 72 * 20, 20)
@@ -114,7 +115,8 @@ def test_bifurcation_diagram_on_the_cluster_is_the_local_diagram(client, monkeyp
     assert own != whole
     theta, _, _ = bifurcation_samples(rows, family, np.ones(7), np.array([[0.2], [1.0]]),
                                       np.zeros((2, 1)), 32, 40, 20, "rk4", own)
-    assert not np.array_equal(np.moveaxis(theta, 0, 1), local.theta[:, :3])
+    assert np.array_equal(np.moveaxis(theta, 0, 1), local.theta[:, :3])
+    assert not np.array_equal(np.moveaxis(theta, 0, 1), local.theta[:, 3:6])
 
 
 def test_lyapunov_map_of_a_family_on_the_cluster_is_the_local_map(client):
@@ -146,8 +148,8 @@ def test_variational_lyapunov_map_on_the_cluster_is_the_local_map(client):
 
 def test_lyapunov_spectrum_of_a_family_on_the_cluster_is_the_local_spectrum(client, monkeypatch):
     # Little memory per segment: the whole batch would run in segments of 10 steps, a
-    # chunk of it in longer ones; the driven field's time is rounded from a segment's
-    # start, so the chunks must run in the whole batch's segments.
+    # chunk of it in longer ones; the driven field's time counts from the run's start, so
+    # that changes no bit.
     monkeypatch.setattr(segments, "SEGMENT_FLOATS", 1000)
     family = pl.driven_pendulum().family(drive_amplitude=[0.9, 1.2, 1.5])
     theta0, omega0 = np.full((2, 3, 1), 0.2), np.zeros((2, 3, 1))
@@ -159,14 +161,17 @@ def test_lyapunov_spectrum_of_a_family_on_the_cluster_is_the_local_spectrum(clie
                                      chunk_size=2)
     assert remote.running.shape == local.running.shape == (40, 2, 3, 2)
     assert np.array_equal(remote.running, local.running) and np.array_equal(remote.t, local.t)
-    # Negative control: a chunk in segments of its own size is not the same to the bit.
+    # A chunk in segments of its own size is the same to the bit; negative control: other
+    # rows of the batch are not.
     rows = np.arange(2)  # released at rest: p0 = 0
     own = segments.segment_length(400, 4 * len(rows) * 4, 10)
     assert own != segments.segment_length(400, 4 * 6 * 4, 10)
     running = tangent_running(theta0.reshape(-1, 1)[rows], np.zeros((2, 1)), rows,
                               family.for_ensemble((2, 3)), period / 20, 10, 40, "rk4",
                               np.eye(2), own)
-    assert not np.array_equal(running, local.running.reshape(40, 6, 2)[:, rows].swapaxes(0, 1))
+    assert np.array_equal(running, local.running.reshape(40, 6, 2)[:, rows].swapaxes(0, 1))
+    assert not np.array_equal(running,
+                              local.running.reshape(40, 6, 2)[:, rows + 2].swapaxes(0, 1))
 
 
 def test_basins_on_the_cluster_are_the_local_basins(client, monkeypatch):
@@ -182,14 +187,18 @@ def test_basins_on_the_cluster_are_the_local_basins(client, monkeypatch):
     assert remote.turns == local.turns and remote.method == local.method
     assert len(remote.attractors) == len(local.attractors)
     assert all(np.array_equal(r, a) for r, a in zip(remote.attractors, local.attractors))
-    # Negative control: a chunk in segments of its own size is not the same to the bit.
+    # A chunk in segments of its own size is the same to the bit; negative control: the
+    # chunk under another drive is not (the starts themselves settle on the same attractor).
     theta, omega = (a.reshape(-1, 1)[:3] for a in np.meshgrid(*axes))
     own = segments.default_segment_steps(1, 3, 38 * 40, 40)
     whole = segments.default_segment_steps(1, 20, 38 * 40, 40)
     assert own != whole
     as_chunk = basin_samples(theta, omega, np.arange(3), model, 8, 30, 40, "rk4", whole)
     alone = basin_samples(theta, omega, np.arange(3), model, 8, 30, 40, "rk4", own)
-    assert not np.array_equal(alone[0], as_chunk[0])
+    assert np.array_equal(alone[0], as_chunk[0])
+    other = basin_samples(theta, omega, np.arange(3), model.replace(drive_amplitude=1.3), 8, 30,
+                          40, "rk4", own)
+    assert not np.array_equal(other[0], as_chunk[0])
 
 
 @pytest.mark.parametrize("measure", [

@@ -56,6 +56,41 @@ def test_a_segmented_run_is_the_same_run_to_the_last_bit(method):
     assert np.max(np.abs(chained[-1][0] - exact.theta[-1][0])) > 1e-9
 
 
+@pytest.mark.parametrize("model", [pl.driven_pendulum(), pl.kapitza_pendulum()],
+                         ids=["driven", "kapitza"])
+def test_a_segmented_driven_run_is_the_same_run_to_the_last_bit(model):
+    # The chaotic driven pendulum over 60 drive periods, the Kapitza pendulum over 60
+    # shakes; t0 = 0.3 s so that the clock is not a plain multiple of the step.
+    period = model.drive_period
+    dt, t0 = period / 50, 0.3
+    start = (np.array([np.pi - 0.3]), np.array([0.2]))
+    whole = pl.simulate(model, *start, t_end=60 * period, dt=dt, method="rk4", t0=t0,
+                        save_every=2, progress=False)
+    pieces = list(pl.simulate_segments(model, *start, t_end=60 * period, dt=dt, method="rk4",
+                                       t0=t0, save_every=2, segment_steps=70, progress=False))
+    assert len(pieces) > 40
+    for name in ("t", "theta", "p", "energy", "hamiltonian"):
+        joined = np.concatenate([getattr(pieces[0], name)]
+                                + [getattr(piece, name)[1:] for piece in pieces[1:]])
+        assert np.array_equal(joined.reshape(getattr(whole, name).shape),
+                              getattr(whole, name)), name
+    # Negative control: segments that count their step times from their own start (the
+    # clock before) leave the long run in the last bits, and the drive makes it grow.
+    from pendulum_lab.driver.loops import compile_method
+    from pendulum_lab.driver.simulate import hamiltonian_field, integrate, to_method_variables
+    method = pl.get_method("rk4")
+    compiled = compile_method(method, hamiltonian_field(model), model.n)
+    q = start[0].reshape(1, 1).copy()
+    y = to_method_variables(model, method, q, start[1].reshape(1, 1), False, t=t0)
+    memory, done, last = compiled.new_memory(1), 0, None
+    while done < len(whole.t) * 2 - 2:
+        steps = min(70, 2 * (len(whole.t) - 1) - done)
+        last = integrate(model, compiled, q, y, (1,), t_end=steps * dt, dt=dt, n_steps=steps,
+                         save_every=2, t0=t0 + done * dt, progress=False, memory=memory)
+        done += steps
+    assert not np.array_equal(last.theta[-1, 0], whole.theta[-1])
+
+
 def test_segments_carry_the_start_time():
     run = pl.simulate_segments(SP, [1.0], [0.0], t_end=1.0, dt=0.1, method="rk4", t0=5.0,
                                segment_steps=4)

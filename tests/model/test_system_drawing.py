@@ -94,3 +94,55 @@ def test_a_system_given_by_its_lagrangian_has_no_drawing_and_says_why():
                                  name="the oscillator")
     with pytest.raises(TypeError, match="the oscillator was given by its Lagrangian"):
         model.drawing  # noqa: B018
+
+
+# ---- the suspension read from the points, when no joints or springs are declared ----------
+def sideways_pendulum(**options):
+    th, t = sp.Symbol("theta", real=True), sp.Symbol("t", real=True)
+    a, w, m, length, g = sp.symbols("a w m l g", positive=True)
+    return pl.mechanical_system(
+        [th], {a: 0.1, w: 20.0, m: 1.0, length: 0.8, g: 9.81},
+        points=[(a * sp.cos(w * t) + length * sp.sin(th), -length * sp.cos(th))], masses=[m],
+        gravity=g, name="a pendulum shaken sideways", **options)
+
+
+def test_a_pendulum_shaken_sideways_is_drawn_with_its_rod_and_moving_pivot():
+    from pendulum_lab.widgets.live import figure_message
+
+    model = sideways_pendulum()
+    drawing = model.drawing
+    assert drawing.masses == (1.0, 0.0) and drawing.rods == ((1, 0),)
+    assert drawing.movable[0] is None and drawing.movable[1] is not None  # the pivot is led
+    run = pl.simulate(model, [0.5], [0.0], t_end=0.5, dt=0.005, method="rk4", progress=False)
+    xs, ys = model.positions(run.theta, run.t)
+    np.testing.assert_allclose(xs[:, 1], 0.1 * np.cos(20.0 * run.t), atol=1e-15)
+    np.testing.assert_allclose(ys[:, 1], 0.0, atol=0)
+    # the rod keeps its length while the pivot moves
+    np.testing.assert_allclose(np.hypot(xs[:, 0] - xs[:, 1], ys[:, 0] - ys[:, 1]), 0.8,
+                               rtol=1e-13)
+    assert np.ptp(xs[:, 1]) > 0.1  # and the pivot does move
+    message = figure_message(model, np.stack([xs, ys], axis=-1))
+    assert message["rods"] == [[1, 0]] and message["masses"] == [1.0, 0.0]
+    assert message["trailed"] == 0  # the trail follows the bob, not the pivot
+    # The added massless point changes nothing in the motion: the same run as with the
+    # joint declared by hand (which draws a lone disc without it).
+    bare = sideways_pendulum(joints=[])
+    assert bare.drawing.rods == () and bare.drawing.masses == (1.0,)  # negative control
+    same = pl.simulate(bare, [0.5], [0.0], t_end=0.5, dt=0.005, method="rk4", progress=False)
+    np.testing.assert_array_equal(same.theta, run.theta)
+
+
+def test_rods_are_read_from_fixed_distances_only():
+    t1, t2, r = sp.symbols("theta1 theta2 r", real=True)
+    m, length, g, k = sp.symbols("m l g k", positive=True)
+    values = {m: 1.0, length: 1.0, g: 9.81}
+    bob1 = (length * sp.sin(t1), -length * sp.cos(t1))
+    bob2 = (bob1[0] + length * sp.sin(t2), bob1[1] - length * sp.cos(t2))
+    double = pl.mechanical_system([t1, t2], values, points=[bob1, bob2], masses=[m, m],
+                                  gravity=g)
+    assert double.drawing.rods == ((-1, 0), (0, 1))
+    # negative control: a spring's length changes, so no rod is drawn for it
+    spring = pl.mechanical_system([r, t1], values | {k: 40.0},
+                                  points=[(r * sp.sin(t1), -r * sp.cos(t1))], masses=[m],
+                                  gravity=g, potential=k * (r - 1) ** 2 / 2)
+    assert spring.drawing.rods == () and len(spring.drawing.masses) == 1

@@ -38,3 +38,27 @@ def test_a_check_without_requirements_is_refused():
         Exercise("4. Empty", 1).require(True, "")
     with pytest.raises(TypeError, match="title"):
         Exercise("", 1)
+
+
+def test_in_a_notebook_a_wrong_answer_shows_its_verdict_and_hints_not_a_traceback():
+    from IPython.core.interactiveshell import InteractiveShell
+
+    shell = InteractiveShell.instance()
+    shown = []
+    original = shell._showtraceback
+    shell._showtraceback = lambda etype, value, lines: shown.append(lines)
+    try:
+        shell.run_cell(
+            "from pendulum_lab.exercises import Exercise\n"
+            "wrong = Exercise('3. A period', 6.0)\n"
+            "wrong.require(False, 'the period of small swings is 2 pi sqrt(l / g)')\n"
+            "wrong.require(False, 'a period has units of seconds')\n"
+            "wrong.report()\n")
+        assert shown[-1] == ["Exercise 3. A period: not yet.",
+                             "Hint: the period of small swings is 2 pi sqrt(l / g)",
+                             "Hint: a period has units of seconds"]
+        # negative control: any other error keeps its full traceback into the code
+        shell.run_cell("from pendulum_lab.exercises import Exercise\nExercise('', 1)\n")
+        assert len(shown[-1]) > 3 and any("exercises.py" in line for line in shown[-1])
+    finally:
+        shell._showtraceback = original

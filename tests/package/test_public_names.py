@@ -153,7 +153,7 @@ def test_a_name_that_never_existed_is_an_attribute_error():
 #: Names added since the layering, with the module that holds each.
 ADDED = {
     "pl": ("MechanicalSystem", "SystemModel", "cart_pendulum", "elastic_pendulum",
-           "kapitza_pendulum", "mechanical_system"),
+           "kapitza_pendulum", "mechanical_system", "method_source"),
     "model": ("SystemModel", "cart_pendulum", "elastic_pendulum", "kapitza_pendulum",
               "mechanical_system"),
     "codegen": ("load_system_kernels",),

@@ -99,3 +99,68 @@ def test_model_code_builds_the_same_model(model):
     call = SimulateCall(model, np.full(model.n, 0.3), np.zeros(model.n), t_end=0.5, dt=0.01,
                         method="rk4")
     assert_same_run(run_code(call.code())["traj"], call.run())
+
+
+def last_value(code: str):
+    """What a pasted cell shows: the value of its last line if that is an expression."""
+    import ast
+
+    tree = ast.parse(code)
+    namespace: dict = {}
+    *body, last = tree.body
+    exec(compile(ast.Module(body, []), "<copied>", "exec"), namespace)  # noqa: S102
+    if not isinstance(last, ast.Expr):
+        exec(compile(ast.Module([last], []), "<copied>", "exec"), namespace)  # noqa: S102
+        return None
+    return eval(compile(ast.Expression(last.value), "<copied>", "eval"), namespace)  # noqa: S307
+
+
+def drawn(figure) -> int:
+    """Axes of ``figure`` that hold data (lines, points, patches)."""
+    return sum(bool(ax.lines or ax.collections or ax.patches) for ax in figure.axes)
+
+
+@pytest.mark.parametrize("build", [
+    lambda: widgets.explore(pl.double_pendulum(), t_end=2.0, method="rk4"),
+    lambda: widgets.explore(pl.simple_pendulum(), t_end=2.0, method="rk4",
+                            plots=("energy", "angles", "phase")),
+    lambda: widgets.explore_equilibrium(pl.double_pendulum(), "up-down", t_end=2.0,
+                                        offset=[0.02, -0.01]),
+    lambda: widgets.explore_energy(pl.double_pendulum(), energy=-12.3, t_end=2.0, method="rk4"),
+    lambda: widgets.explore_energy(pl.simple_pendulum(), energy=-5.0, t_end=2.0, method="rk4"),
+    lambda: widgets.live_simulator(pl.double_pendulum(), t_end=2.0, method="rk4"),
+    lambda: animation.simulator(pl.driven_pendulum(), [0.4], [0.2], t_end=2.0, method="rk4"),
+], ids=["explore", "explore-3-panels", "equilibrium", "energy", "energy-1", "live",
+        "matplotlib"])
+def test_the_copied_code_draws_the_run_as_its_last_value(build):
+    from matplotlib.figure import Figure
+
+    instrument = build()
+    code = instrument.code()
+    figure = last_value(code)
+    assert isinstance(figure, Figure) and drawn(figure) >= 1
+    assert drawn(figure) == len(figure.axes)  # no empty axes left over
+    # negative control: the call alone computes the run and draws nothing
+    assert last_value(instrument.call.code()) is None
+
+
+def test_a_students_own_panel_is_named_in_the_copied_code():
+    def my_panel(ax, traj, model):
+        ax.plot(traj.t, traj.theta[:, 0])
+
+    ex = widgets.explore(pl.simple_pendulum(), t_end=1.0, method="rk4",
+                         plots=("energy", my_panel))
+    code = ex.code()
+    assert "panels = [pl.plotting.PANELS['energy'], my_panel]" in code
+    namespace = {"my_panel": my_panel}
+    exec(compile(code, "<copied>", "exec"), namespace)  # noqa: S102
+    assert drawn(namespace["fig"]) == 2
+
+
+def test_the_clickable_explorers_code_draws_what_they_show():
+    portrait = widgets.portrait_explorer(pl.simple_pendulum(), t_end=2.0, method="rk4")
+    assert portrait.click(0.5, 0.0)
+    assert drawn(last_value(portrait.code())) == 1
+    section = widgets.section_explorer(pl.double_pendulum(m2=0.8), energy=-15.0, t_end=10.0)
+    assert section.click(0.4, 0.7)
+    assert drawn(last_value(section.code())) == 1

@@ -146,3 +146,22 @@ def test_forces_text_names_every_joint_when_they_differ():
     assert controls.forces_text(model) == "damping 0.1, 0, 0.2 N m s/rad, no drive"
     assert controls.forces_text(SIMPLE) == "no damping, no drive"
     assert controls.energy_is_conserved(SIMPLE) and not controls.energy_is_conserved(model)
+
+
+def test_what_changes_a_systems_energy_is_said_from_the_system_itself():
+    from pendulum_lab.widgets.live import run_messages
+
+    kapitza = widgets.live_simulator(pl.kapitza_pendulum(), t_end=1.0, dt=0.002, method="rk4")
+    message = kapitza.message
+    assert "not conserved (no damping or applied forces, a point moved with the time" in message
+    assert "the work of the moving point plus the method's error" in message
+    # no force is named that the system does not have
+    assert "besides the potential" not in message and "the forces' work" not in message
+    meta = run_messages(kapitza.trajectory, kapitza.model, run=1)[0][0]
+    assert meta["changed_by"] == "the moving point" and not meta["conserved"]
+    # negative controls: the damped, driven chain names both; a conservative system nothing
+    assert controls.energy_changers(DRIVEN) == "the damping and the drive"
+    assert controls.energy_changers(pl.driven_pendulum(drive_amplitude=0.0)) == "the damping"
+    assert controls.energy_changers(pl.elastic_pendulum()) == ""
+    elastic = widgets.live_simulator(pl.elastic_pendulum(), t_end=1.0, dt=0.01, method="rk4")
+    assert "not conserved" not in elastic.message

@@ -342,8 +342,7 @@ def _tangent_growth(model, theta0, omega0, p0, *, t_end, dt, method, save_every,
     method = get_method(method)
     client = check_client(client)
     # Memory of a segment: the Jacobians and propagators of each of its steps. Sized
-    # for the whole batch and passed to every chunk: a driven model's time at a step
-    # is rounded from its segment's start (see default_segment_steps).
+    # for the whole batch and passed to every chunk (see default_segment_steps).
     length = segment_length(blocks * every, 4 * len(theta0) * (2 * model.n) ** 2, every)
     running = map_members(
         tangent_running, (theta0, p0, np.arange(len(theta0))), client=client,

@@ -12,11 +12,10 @@ computed in this process (its members in parallel threads, as
 contiguous chunks that the cluster's workers compute with the same function
 and the same compiled kernels, and the results come back in order. Members
 of an ensemble never interact (every member is integrated on its own, with
-the same steps), so the result is the local one bit for bit, provided a
-chunk runs in the segments the whole batch would (a driven model's time at a
-step is rounded from its segment's start; see
-:func:`~pendulum_lab.driver.segments.default_segment_steps`) and a family's chunk
-keeps its own members (:func:`members_of`). The tests check all of this on
+the same steps, a driven model's step times computed from the step's number
+since the run's start, whatever the segments), so the result is the local one
+bit for bit, provided a family's chunk keeps its own members
+(:func:`members_of`). The tests check all of this on
 a ``LocalCluster``.
 
 A model travels to the workers as its constructor call (it pickles small);

@@ -69,11 +69,11 @@ STEPS, SWEEPS, CALLS, STATUS = 0, 1, 2, 3
 PARALLEL_MIN_MEMBERS = 64
 _ROWS, _ROW = types.float64[:, ::1], types.float64[::1]
 #: The Numba type of every compiled loop ``run`` (the generated module's): ``(separable,
-#: damping_rates, q, p, t0, h, n_steps, first_step, save_every, params, saved_q, saved_p,
-#: stats, memory)``, C arrays. Given, so that the loop is compiled (or loaded) when its
+#: damping_rates, q, p, t0, h, n_steps, first_step, origin, save_every, params, saved_q,
+#: saved_p, stats, memory)``, C arrays. Given, so that the loop is compiled (or loaded) when its
 #: module is made, in :func:`compile_method`, and never on a run's first call.
 RUN = types.void(types.boolean, _ROW, _ROWS, _ROWS, types.float64, types.float64, types.int64,
-                 types.int64, types.int64, _ROWS, types.float64[:, :, ::1],
+                 types.int64, types.int64, types.int64, _ROWS, types.float64[:, :, ::1],
                  types.float64[:, :, ::1], types.int64[:, ::1], _ROWS)
 
 
@@ -96,7 +96,7 @@ def _copy(out, x):
 
 @kernel_function
 def time_loop(step, first_kernel, second_kernel, n, separable, damping_rates, q, p, t0, h,
-              n_steps, first_step, save_every, params, saved_q, saved_p, stats, memory):
+              n_steps, first_step, origin, save_every, params, saved_q, saved_p, stats, memory):
     """Advance every row of ``(q, p)`` (shape ``(K, n)``) by ``n_steps`` steps, in place.
 
     ``step`` receives ``first_kernel`` and ``second_kernel``: the field's
@@ -108,10 +108,12 @@ def time_loop(step, first_kernel, second_kernel, n, separable, damping_rates, q,
     have a known length, which the compiler unrolls.
 
     Steps are numbered globally from ``first_step + 1`` so that a long run can
-    be made of several calls (for a progress bar); step ``s`` goes from time
-    ``t0 + (s - 1) h`` to ``t0 + s h`` (computed from ``s``, not summed), and
-    row ``k``'s state after it is stored in ``saved_q[k, s // save_every]``
-    when ``save_every`` divides ``s``. ``params`` (shape ``(1, P)`` or
+    be made of several calls (for a progress bar, for segments); step ``s`` goes from time
+    ``t0 + (s - 1) h`` to ``t0 + s h`` (computed from ``s``, not summed: a run cut into
+    segments evaluates a drive at the same times as one long call, to the bit), and row
+    ``k``'s state after it is stored in ``saved_q[k, (s - origin) // save_every]`` when
+    ``save_every`` divides ``s - origin`` (``origin``: the step of the state saved first,
+    where this segment starts; ``stats`` counts steps from it). ``params`` (shape ``(1, P)`` or
     ``(K, P)``) and ``damping_rates`` (shape ``(1,)`` or ``(K,)``) are shared
     or per row; ``memory[k]`` is row ``k``'s memory, handed to every step.
     ``stats[k]`` accumulates (steps done, solver sweeps, vector-field calls,
@@ -134,7 +136,7 @@ def time_loop(step, first_kernel, second_kernel, n, separable, damping_rates, q,
         _copy(qk, q[k])
         _copy(pk, p[k])
         done, sweeps_done, calls_done, status = stats[k, STEPS], 0, 0, RUNNING
-        until_save = save_every - first_step % save_every
+        until_save = save_every - (first_step - origin) % save_every
         for s in range(first_step + 1, first_step + n_steps + 1):
             q1, p1, sweeps, calls = step(first_kernel, second_kernel, t0 + (s - 1) * h, qk, pk, h,
                                          row_params, separable, damping_rate, row_memory)
@@ -147,12 +149,12 @@ def time_loop(step, first_kernel, second_kernel, n, separable, damping_rates, q,
             if not (_all_finite(qk) and _all_finite(pk)):
                 status = NOT_FINITE
                 break
-            done = s
+            done = s - origin
             sweeps_done += sweeps
             until_save -= 1
             if until_save == 0:
-                saved_q[k, s // save_every] = qk
-                saved_p[k, s // save_every] = pk
+                saved_q[k, done // save_every] = qk
+                saved_p[k, done // save_every] = pk
                 until_save = save_every
         q[k], p[k] = qk, pk
         stats[k, STEPS] = done
@@ -182,14 +184,15 @@ COORDINATES = {n}
 
 
 @cached_njit(RUN, nogil=True)
-def run(separable, damping_rates, q, p, t0, h, n_steps, first_step, save_every, params, saved_q,
-        saved_p, stats, memory):
+def run(separable, damping_rates, q, p, t0, h, n_steps, first_step, origin, save_every, params,
+        saved_q, saved_p, stats, memory):
     """time_loop(step, first_kernel, second_kernel, ...) with this module's step and kernels."""
     align_stack()  # the steps' vectorized loops spill 64-byte registers to the stack
     if q.shape[1] != COORDINATES or p.shape[1] != COORDINATES:
         raise ValueError("the states do not have this loop's number of coordinates")
     time_loop(step, first_kernel, second_kernel, COORDINATES, separable, damping_rates, q, p, t0,
-              h, n_steps, first_step, save_every, params, saved_q, saved_p, stats, memory)
+              h, n_steps, first_step, origin, save_every, params, saved_q, saved_p, stats,
+              memory)
 '''
 
 
@@ -242,13 +245,16 @@ class CompiledMethod:
         return np.zeros((members, max(1, self.method.kernel.memory(self.n))))
 
     def advance(self, q, p, h, n_steps, first_step, save_every, saved_q, saved_p, stats,
-                memory, t0: float = 0.0) -> None:
+                memory, t0: float = 0.0, origin: int = 0) -> None:
         """Run the compiled loop on rows ``q, p`` of shape ``(K, n)``, in place.
 
         Step ``s`` (counted from 1 over the whole run, ``first_step`` before this call)
-        starts at time ``t0 + (s - 1) h``. ``field.params`` and ``field.damping_rate`` may
-        hold one row per member (shapes ``(K, P)``, ``(K,)``); ``memory`` (shape ``(K, S)``,
-        :meth:`new_memory`) is what the method keeps per member between steps and calls.
+        starts at time ``t0 + (s - 1) h``; the states saved are those after steps
+        ``origin + j save_every`` (``origin``: the steps of the earlier segments of a run
+        handed out in segments, 0 otherwise), at ``saved_q[:, j]``. ``field.params`` and
+        ``field.damping_rate`` may hold one row per member (shapes ``(K, P)``, ``(K,)``);
+        ``memory`` (shape ``(K, S)``, :meth:`new_memory`) is what the method keeps per member
+        between steps and calls.
         Large ensembles are split into one slice per core; the compiled loop releases the
         GIL, so the slices run in parallel threads.
         """
@@ -259,7 +265,7 @@ class CompiledMethod:
         def advance(rows):
             try:
                 self.run(self.field.separable, rates[rows] if per_member else rates, q[rows],
-                         p[rows], float(t0), float(h), n_steps, first_step, save_every,
+                         p[rows], float(t0), float(h), n_steps, first_step, origin, save_every,
                          params[rows] if per_member else params, saved_q[rows],
                          saved_p[rows], stats[rows], memory[rows])
             except ZeroDivisionError:  # compiled code raises it where NumPy would give inf

@@ -7,11 +7,9 @@ dropped. :func:`simulate_segments` cuts a run into consecutive
 
 * each segment starts exactly where the previous one ended, in the method's
   own variables (``(theta, p)`` for the canonical methods), and at the right
-  time ``t`` (the ``t0`` of its :func:`~pendulum_lab.simulate` call), so the
-  segmented run is the same run as one long call, to the last bit (for a
-  field that depends on time, a driven one, up to the rounding of the step
-  times: a segment counts ``t0 + (s - 1) dt`` from its own start, which can
-  differ from the long call's in the last bit);
+  time: step ``s`` of the whole run starts at ``t0 + (s - 1) dt``, computed from
+  ``s`` as one long call does, so the segmented run is the same run as one long
+  call, to the last bit, a driven one included;
 * the steps are counted once, by :func:`~pendulum_lab.step_count`, and one
   progress bar covers the whole run;
 * between segments the caller may drop ensemble members it is done with
@@ -94,9 +92,8 @@ def default_segment_steps(n: int, members: int, n_steps: int, save_every: int) -
 
     A caller that cuts a batch into chunks (:mod:`pendulum_lab.driver.cluster`) and
     wants every chunk to run in the segments of the whole batch passes this,
-    computed for the whole batch, as ``segment_steps``: a driven model's
-    time at a step is rounded from the segment's start, so the segments must
-    not depend on the chunk.
+    computed for the whole batch, as ``segment_steps``, so that the chunks' segments end
+    at the same steps.
     """
     # A kept state costs about four floats per link and member (angles and
     # momenta, while stepping and in the segment handed out).
@@ -196,8 +193,8 @@ class SegmentedRun:
                 segment = integrate(
                     self.model, self._compiled, self._theta.copy(), self._state.copy(),
                     (len(self.members),), t_end=steps * self.dt, dt=self.dt, n_steps=steps,
-                    save_every=self.save_every, t0=self.time, progress=False,
-                    memory=self._memory,
+                    save_every=self.save_every, t0=self.t0, first_step=self.done,
+                    progress=False, memory=self._memory,
                 )
                 self.done += steps
                 self.completed = segment.completed

@@ -111,7 +111,17 @@ class Trajectory:
     theta, omega, p : ndarray, shape (N+1, ..., n)
         Angles, angular velocities and canonical momenta (``...`` is the
         ensemble shape of the initial state, empty for one trajectory).
-    kinetic, potential, energy : ndarray, shape (N+1, ...)
+    kinetic, potential : ndarray, shape (N+1, ...)
+        ``T`` and ``V`` [J] (for a moving pivot, ``T`` in the fixed frame).
+    energy : ndarray, shape (N+1, ...)
+        The mechanical energy ``T + V`` [J]. Where the pivot moves (the Kapitza
+        pendulum) this is not the Hamiltonian, and neither is conserved.
+    hamiltonian : ndarray, shape (N+1, ...)
+        ``H(q, p, t) = p q' - L`` [J], the function whose Hamilton equations the run
+        integrates: ``dH/dt = dH/dt|_(q, p)`` along the motion (constant if nothing depends
+        on ``t``, and without damping). The same array as ``energy`` where ``H = T + V``
+        (``model.hamiltonian_is_energy``: every chain, a system whose points the time does
+        not move); for a moving pivot ``H = T + V - b q' - 2 T_0``.
     method : Method
     dt : float
     mean_iterations : float
@@ -145,6 +155,7 @@ class Trajectory:
     kinetic: np.ndarray
     potential: np.ndarray
     energy: np.ndarray
+    hamiltonian: np.ndarray
     method: Method
     dt: float
     mean_iterations: float
@@ -157,7 +168,7 @@ class Trajectory:
 
     @property
     def energy_error(self) -> np.ndarray:
-        """``E(t) - E(0)``."""
+        """``E(t) - E(0)`` of the mechanical energy ``E = T + V`` (:attr:`energy`)."""
         return self.energy - self.energy[0]
 
     @property
@@ -865,7 +876,7 @@ def check_progress(progress) -> bool | None:
 
 def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape: tuple, *,
               t_end: float, dt: float, n_steps: int, save_every: int, t0: float, progress,
-              memory=None) -> Trajectory:
+              memory=None, first_step: int = 0) -> Trajectory:
     """The run of :func:`simulate` from validated arguments; ``q``, ``y`` are updated in place.
 
     ``compiled`` is the method compiled for the run's field
@@ -873,7 +884,9 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     ``y`` in the method's variables) are the flattened ensemble of shape ``batch_shape``;
     ``memory`` (shape ``(K, S)``, :meth:`~pendulum_lab.driver.loops.CompiledMethod.new_memory`,
     updated in place) is what the method carries from step to step; a fresh one by default.
-    Passing the memory of the previous call continues that run exactly
+    Passing the memory of the previous call, with ``first_step`` the steps it has taken since
+    ``t0`` (a multiple of ``save_every``), continues that run exactly: the same step times
+    and saved times, computed from the step's number since ``t0``
     (:func:`pendulum_lab.simulate_segments` does). The callers have checked the memory needed
     (:func:`check_memory`), before any work.
     """
@@ -903,8 +916,8 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     try:
         for first in range(0, n_steps, chunk):
             todo = min(chunk, n_steps - first)
-            compiled.advance(q, y, dt, todo, first, save_every, saved_q, saved_y, stats, memory,
-                             t0=t0)
+            compiled.advance(q, y, dt, todo, first_step + first, save_every, saved_q, saved_y,
+                             stats, memory, t0=t0, origin=first_step)
             if bar is not None:
                 bar.update(todo)
             if np.all(stats[:, STATUS] != RUNNING):
@@ -917,7 +930,7 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     failed = np.flatnonzero(stats[:, STATUS] == NOT_CONVERGED)
     if failed.size:
         k = failed[np.argmin(stats[failed, STEPS])]
-        at = int(stats[k, STEPS]) + 1
+        at = first_step + int(stats[k, STEPS]) + 1
         member = f", ensemble member {np.unravel_index(k, batch_shape)}" if batch_shape else ""
         raise ConvergenceError(
             f"{method.name}: the implicit equations did not converge within {MAX_SWEEPS} "
@@ -929,7 +942,8 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     kept = n_saved
     if not completed:
         first_bad = int(np.min(stats[blown, STEPS])) + 1
-        warn_not_finite(method, first_bad, t0 + first_bad * dt, int(blown.sum()), members,
+        at = first_step + first_bad
+        warn_not_finite(method, at, t0 + at * dt, int(blown.sum()), members,
                         "the trajectory stops there." if not batch_shape
                         else "those trajectories hold NaN from there on.", stacklevel=4)
         if not batch_shape:
@@ -938,7 +952,8 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     out_shape = (kept, *batch_shape, model.n)
     theta = np.ascontiguousarray(saved_q[:, :kept].swapaxes(0, 1)).reshape(out_shape)
     saved = np.ascontiguousarray(saved_y[:, :kept].swapaxes(0, 1)).reshape(out_shape)
-    times = t0 + np.arange(kept) * (save_every * dt)
+    # From the saved state's number since t0, as one long run computes them.
+    times = t0 + (first_step // save_every + np.arange(kept)) * (save_every * dt)
     at = times.reshape(-1, *(1,) * len(batch_shape))  # the time of each saved state
     if method.variables == "canonical":
         p, omega = saved, model.velocities(theta, saved, t=at)
@@ -963,11 +978,16 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
             kept = int(first[0])
             theta, omega, p = theta[:kept], omega[:kept], p[:kept]
             kinetic, potential, times = kinetic[:kept], potential[:kept], times[:kept]
+            at = at[:kept]
         else:
             after = (np.arange(kept).reshape(-1, 1) >= first.reshape(1, -1)).reshape(
                 kept, *batch_shape)
             theta, omega, p = (np.where(after[..., None], np.nan, a) for a in (theta, omega, p))
             kinetic, potential = (np.where(after, np.nan, a) for a in (kinetic, potential))
+    with np.errstate(over="ignore", invalid="ignore"):
+        energy = kinetic + potential
+        hamiltonian = (energy if model.hamiltonian_is_energy
+                       else model.hamiltonian_value(theta, p, t=at))
     return Trajectory(
         t=times,
         theta=theta,
@@ -975,7 +995,8 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
         p=p,
         kinetic=kinetic,
         potential=potential,
-        energy=kinetic + potential,
+        energy=energy,
+        hamiltonian=hamiltonian,
         method=method,
         dt=dt,
         mean_iterations=float(stats[:, SWEEPS].sum() / max(stats[:, STEPS].sum(), 1)),

@@ -51,10 +51,10 @@ __all__ = [
     "explicit_runge_kutta",
     "fixed_point",
     "implicit_runge_kutta",
+    "leapfrog",
     "leapfrog_velocity",
     "runge_kutta_reference",
     "semi_implicit_euler_velocity",
-    "stormer_verlet",
     "symplectic_euler",
     "variational",
 ]
@@ -232,9 +232,9 @@ def symplectic_euler(field, t, q, p, h):
     return q + h * field.H_p(t, q, p1), p1
 
 
-def stormer_verlet(field, t, q, p, h):
-    """Stormer-Verlet for a general ``H(t, q, p)`` [HLW, eq. VI.3.4], each implicit equation
-    iterated from its explicit guess (exact for a separable H):
+def leapfrog(field, t, q, p, h):
+    """The leapfrog (Stormer-Verlet) for a general ``H(t, q, p)`` [HLW, eq. VI.3.4], each
+    implicit equation iterated from its explicit guess (exact for a separable H):
 
     ``p_half = p - h/2 H_q(t, q, p_half)``                          (implicit in p_half)
     ``q1 = q + h/2 [H_p(t, q, p_half) + H_p(t + h, q1, p_half)]``   (implicit in q1)
@@ -260,7 +260,7 @@ def conformal_euler(field, t, q, p, h):
 def conformal_leapfrog(field, t, q, p, h):
     """Conformal Stormer-Verlet [MP]: the exact damping for ``h/2``, leapfrog, ``h/2`` again."""
     contraction = math.exp(-field.gamma * h / 2)
-    q1, p1 = stormer_verlet(field, t, q, contraction * p, h)
+    q1, p1 = leapfrog(field, t, q, contraction * p, h)
     return q1, contraction * p1
 
 

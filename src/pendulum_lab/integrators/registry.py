@@ -47,7 +47,7 @@ _REGISTRY = [
            reference=reference.symplectic_euler),
     Method("leapfrog", 2, True, True, "canonical",
            "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step,
-           applies_to=HAMILTONIAN_FIELD, reference=reference.stormer_verlet),
+           applies_to=HAMILTONIAN_FIELD, reference=reference.leapfrog),
     Method.from_tableau("rk4", ButcherTableau(a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0],
                                                  [0, 0, 1, 0]], b=[1 / 6, 1 / 3, 1 / 3, 1 / 6]),
                         "classical fourth-order Runge-Kutta"),

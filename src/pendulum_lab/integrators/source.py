@@ -34,7 +34,7 @@ def _binding(name: str, step: functools.partial) -> str:
     return f"# {name}: {step.func.__name__}(field, t, q, p, h, {bound})"
 
 
-def method_source(method, helpers: bool = True) -> str:
+def method_source(method, helpers: bool = False) -> str:
     """The source code of a method's reference step, the formula the compiled step is tested on.
 
     Notebooks show this next to the derivation. The compiled kernel
@@ -49,9 +49,10 @@ def method_source(method, helpers: bool = True) -> str:
         ``VARIATIONAL_METHODS``, or a :class:`~pendulum_lab.integrators.method.Method`
         with a reference step.
     helpers : bool
-        Also append the source of the functions of the step's module that it calls (the
-        symplectic step a conformal one composes, the fixed-point solver, the stopping
-        rule), each once, in order of first use.
+        Also show the functions of the step's module that it calls (the symplectic step a
+        conformal one composes, the fixed-point solver with its stopping rule), each once,
+        in order of first use, after the step. By default only a last comment line names
+        them: the step is the lesson, the solver's stopping rule is not.
 
     Returns
     -------
@@ -66,6 +67,8 @@ def method_source(method, helpers: bool = True) -> str:
         ...
         y1 = y + h * field.f(t, y)
     ...
+    >>> print(method_source("leapfrog").splitlines()[-1])
+    # It calls fixed_point, shown by method_source('leapfrog', helpers=True).
     """
     chosen = get_method(method)
     step = chosen.reference
@@ -75,7 +78,7 @@ def method_source(method, helpers: bool = True) -> str:
     if isinstance(step, functools.partial):
         header, step = [_binding(chosen.name, step)], step.func
     found, queue = [step], [step]
-    while helpers and queue:
+    while queue:
         function = queue.pop(0)
         for name in _code_names(function.__code__):
             candidate = function.__globals__.get(name)
@@ -83,5 +86,12 @@ def method_source(method, helpers: bool = True) -> str:
                     and candidate not in found):
                 found.append(candidate)
                 queue.append(candidate)
-    sources = [inspect.getsource(function).rstrip() for function in found]
-    return "\n".join(header) + ("\n" if header else "") + "\n\n".join(sources) + "\n"
+    shown = found if helpers else found[:1]
+    text = "\n".join(header) + ("\n" if header else "") + "\n\n".join(
+        inspect.getsource(function).rstrip() for function in shown) + "\n"
+    if not helpers and len(found) > 1:
+        names = [function.__name__ for function in found[1:]]
+        names = " and ".join([", ".join(names[:-1]), names[-1]] if len(names) > 1 else names)
+        text += (f"# It calls {names}, shown by method_source({chosen.name!r}, "
+                 "helpers=True).\n")
+    return text

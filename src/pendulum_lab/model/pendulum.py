@@ -207,6 +207,9 @@ class PendulumModel:
     periodic_coordinates: bool = True
     #: A planar chain of rods (a ``SystemModel``, given by its points or Lagrangian, is not).
     is_chain: bool = True
+    #: The Hamiltonian equals ``T + V`` (a chain's pivot is fixed; a ``SystemModel`` whose
+    #: points move with the time, such as the Kapitza pendulum's, answers False).
+    hamiltonian_is_energy: bool = True
 
     #: Shape of the parameters: ``()`` for one model; a
     #: :class:`~pendulum_lab.model.ModelFamily` has one model per entry.
@@ -831,13 +834,16 @@ def family_parameter(model, parameter, argument: str = "parameter") -> str:
     ``ValueError`` naming ``argument`` and the parameters that can vary.
 
     Those are ``model.family_parameters``; a system's ``clock_parameters`` (the Kapitza
-    pendulum's ``w``) are refused with the reason: its period was given with them.
+    pendulum's ``w``) are refused with the reason: they set the period, which the members
+    of a family and the orbits of a continuation share.
     """
     allowed = list(model.family_parameters)
     if parameter in model.clock_parameters:
         raise ValueError(f"`{argument}` {parameter!r} sets how {model.name} depends on the time "
-                         "(its period), so it cannot vary along a family or an orbit: build one "
-                         f"model per value instead; the parameters that can vary are {allowed}")
+                         "(its period, shared by a family's members and a continuation's "
+                         "orbits), so it cannot vary along a family or an orbit: build one "
+                         f"model per value instead (model.replace({parameter}=...)); the "
+                         f"parameters that can vary are {allowed}")
     return check.choice(argument, parameter, allowed)
 
 

@@ -53,9 +53,13 @@ class SystemModel(PendulumModel):
     system : MechanicalSystem
     values : dict, optional
         Values replacing some of the system's defaults, ``{symbol or name: number}``.
-    period : float, optional
-        The period of the time dependence [s] (a shaken pivot's), for messages about
-        rounded times.
+    period : float or sympy expression, optional
+        The period of the time dependence [s] (a shaken pivot's): a number, or an
+        expression of the parameters (``2*pi/w``). By default the system's own
+        (:attr:`MechanicalSystem.period <pendulum_lab.symbolic.systems.MechanicalSystem.period>`),
+        if its time dependence is periodic. A number is taken as that many of the system's
+        own periods, so that :meth:`replace` of a parameter the time dependence reads (the
+        Kapitza pendulum's ``w``) moves it with them.
     start : sequence of float, optional
         The coordinates the simulators and explorers start from by default (zeros if not
         given); the velocities start at zero.
@@ -84,14 +88,21 @@ class SystemModel(PendulumModel):
         values = dict(system.defaults) | {by_name[str(s)]: v for s, v in given.items()}
         if values != system.defaults:  # the constructor checked the defaults
             system.check_values(values)
-        if period is not None:
+        if period is not None and not isinstance(period, sp.Basic):
             period = _positive("period", period)
         self.system = self.chain = system
         self.n = system.n
         self.forced = system.forced
         self._fn = compiled_system(system)
         self._params = tuple(values[s] for s in system.parameters)
-        self._period = period
+        self._period = _period_rule(system, period, values)
+        self._period_value = (None if self._period is None
+                              else float(self._period.xreplace(values)))
+        if self._period_value is not None and not (math.isfinite(self._period_value)
+                                                   and self._period_value > 0):
+            raise ValueError(f"the period of {system.name} is {self._period} = "
+                             f"{self._period_value} s at these parameter values; it must be "
+                             "positive and finite")
         self.start = (np.zeros(self.n) if start is None
                       else check.state_vector("start", start, self.n))
         self.factory = factory
@@ -137,8 +148,10 @@ class SystemModel(PendulumModel):
         return self.system.positivity_proved
 
     @property
-    def drive_period(self):
-        return self._period
+    def drive_period(self) -> float | None:
+        """The period of the time dependence [s] at these parameter values (it follows
+        :meth:`replace`), or None."""
+        return self._period_value
 
     @property
     def conformal_damping_rate(self):
@@ -148,6 +161,15 @@ class SystemModel(PendulumModel):
     @property
     def separable(self) -> bool:
         return self.system.separable
+
+    @functools.cached_property
+    def hamiltonian_is_energy(self) -> bool:
+        """Whether ``H = T + V``: the kinetic energy is quadratic in the velocities (no
+        moving pivot). Otherwise ``H - (T + V) = -b q' - 2 T_0``, with ``b`` the momentum
+        offset and ``T_0`` the kinetic energy at rest, the points' motion the time imposes."""
+        rest = {w: 0 for w in self.system.omega}
+        return bool(all(b == 0 for b in self.system.momentum_offset)
+                    and sp.expand(self.system.kinetic.xreplace(rest)) == 0)
 
     @property
     def damping(self) -> str:
@@ -175,15 +197,24 @@ class SystemModel(PendulumModel):
         return self.system.angle_coordinates
 
     def replace(self, **changes) -> SystemModel:
-        """A copy with some parameter values changed (by name)."""
+        """A copy with some parameter values changed (by name); the period follows them
+        (``pl.kapitza_pendulum().replace(w=50).drive_period`` is ``2 pi / 50``)."""
+        clock = set(self.clock_parameters) & set(changes)
+        if clock and self._period is not None and not self._period.free_symbols:
+            raise ValueError(
+                f"{sorted(clock)} set{'s' if len(clock) == 1 else ''} how {self.name} depends "
+                f"on the time, but its period was given as the number {self._period_value:g} "
+                "s and no period could be derived from its equations: build it with `period` "
+                "as an expression of the parameters (such as 2*sp.pi/w)")
         return SystemModel(self.system, dict(zip(map(str, self.system.parameters),
                                                  self._params)) | changes, period=self._period,
                            start=self.start, factory=self.factory)
 
     @property
     def clock_parameters(self) -> tuple[str, ...]:
-        """The parameters the time dependence reads (the Kapitza pendulum's ``w``): the
-        model's period was given with them, so families and orbit continuation keep them."""
+        """The parameters the time dependence reads (the Kapitza pendulum's ``w``): they set
+        the period, which every member of a family and every orbit of a continuation shares,
+        so families and continuations keep them (:meth:`replace` changes them)."""
         return self.system.clock_parameters
 
     @property
@@ -208,21 +239,23 @@ class SystemModel(PendulumModel):
     def __reduce__(self):
         return SystemModel, (self.system, dict(zip(map(str, self.system.parameters),
                                                    self._params))), {
-            "_period": self._period, "start": self.start, "factory": self.factory}
+            "_period": self._period, "_period_value": self._period_value, "start": self.start,
+            "factory": self.factory}
 
     @functools.cached_property
     def equilibria(self) -> tuple:
         """The equilibria SymPy finds at these parameter values, least potential energy first.
 
         A coordinate an equilibrium leaves free (the cart's position ``x``) is set to 0, so
-        each point is a number; each name reads ``"r = 1/2, theta = pi"``. An empty tuple if
+        each point is a number; each name reads ``"r = 0.5, theta = pi"`` (a multiple of pi
+        with a small denominator by name, other numbers to 6 digits). An empty tuple if
         SymPy finds none; a ``ValueError`` if the equations depend on the time.
         """
         free = {qi: 0 for qi in self.system.q}
         found = []
         for equilibrium in self.system.equilibria(self.parameter_values):
             point = tuple(float(sp.sympify(c).xreplace(free)) for c in equilibrium.angles)
-            name = ", ".join(f"{qi} = {sp.nsimplify(v, [sp.pi], tolerance=1e-12)}"
+            name = ", ".join(f"{qi} = {readable_number(v)}"
                              for qi, v in zip(self.system.q, point))
             found.append(dataclasses.replace(
                 equilibrium, name=name, angles=point,
@@ -279,7 +312,7 @@ class SystemModel(PendulumModel):
 
     def hamiltonian_value(self, theta, p, t=None) -> np.ndarray:
         """``H = 1/2 omega^T M omega - L(q, 0, t)`` at ``omega = M^-1 (p - b)``; equal to
-        ``T + V`` unless the pivot moves."""
+        ``T + V`` unless the pivot moves (:attr:`hamiltonian_is_energy`)."""
         theta, t = self._states("theta", theta), self._time(t)
         omega = self.velocities(theta, p, t)
         mass = self._fn.mass_matrix(theta, self._params, t)
@@ -422,7 +455,8 @@ class SystemFamily(FamilyMembers, SystemModel):
         self.base = base
         self.system = self.chain = base.system
         self.n, self.forced, self._fn = base.n, base.forced, base._fn
-        self._period, self.start, self.factory = base._period, base.start, base.factory
+        self._period, self._period_value = base._period, base._period_value
+        self.start, self.factory = base.start, base.factory
         defaults = dict(zip(map(str, base.system.parameters), base._params))
         self._params = tuple(np.array(np.broadcast_to(self.values.get(name, value), shape),
                                       dtype=float) for name, value in defaults.items())
@@ -469,7 +503,9 @@ def mechanical_system(coordinates, parameters, *, points=None, masses=None, grav
     (``coordinates``, ``parameters`` with default values, ``points`` with ``masses``,
     ``gravity``, ``potential``, or a ``lagrangian``; ``dissipation``, ``forces``; the
     ``joints`` drawn as rods and the ``springs``), plus ``period``, the period of a time
-    dependence, if any, and ``start``, the coordinates the simulators start from.
+    dependence (a number or an expression of the parameters; by default derived from the
+    equations when they are periodic in ``t``), and ``start``, the coordinates the
+    simulators start from.
 
     Examples
     --------
@@ -487,6 +523,50 @@ def mechanical_system(coordinates, parameters, *, points=None, masses=None, grav
                               velocities=velocities, dissipation=dissipation, forces=forces,
                               joints=joints, springs=springs, name=name)
     return SystemModel(system, period=period, start=start)
+
+
+def readable_number(value: float, digits: int = 6) -> str:
+    """``value`` as people read it: a fraction or a multiple of pi with a denominator up to
+    12 by name (``"1/2"``, ``"pi"``, ``"-pi/2"``), any other number to ``digits``
+    significant digits (an equilibrium found at float parameter values is a float, not
+    ``2176782336/(282475249*pi**113)``).
+
+    Examples
+    --------
+    >>> readable_number(np.pi), readable_number(-np.pi / 2), readable_number(0.5)
+    ('pi', '-pi/2', '1/2')
+    >>> readable_number(0.9499999999999998), readable_number(1.0270642201834863)
+    ('0.95', '1.02706')
+    """
+    value = float(value)
+    if value == 0:
+        return "0"
+    for unit, scale in ((sp.Integer(1), 1.0), (sp.pi, math.pi)):
+        multiple = value / scale
+        for denominator in range(1, 13):
+            numerator = round(multiple * denominator)
+            if numerator and abs(multiple * denominator - numerator) <= 1e-12 * abs(numerator):
+                return str(sp.Rational(numerator, denominator) * unit)
+    return f"{value:.{digits}g}"
+
+
+def _period_rule(system: MechanicalSystem, period, values: dict) -> sp.Expr | None:
+    """The period as an expression of the parameters (a constant if nothing better is
+    known), from ``period`` as :class:`SystemModel` takes it."""
+    if period is None:
+        return system.period
+    if isinstance(period, sp.Basic):  # given as an expression: no need to derive one
+        unknown = period.free_symbols - set(system.parameters)
+        if unknown:
+            raise ValueError(f"`period` uses {sorted(map(str, unknown))}, which are not "
+                             f"parameters of {system.name} ({list(map(str, system.parameters))})")
+        return period
+    value = check.positive_number("period", period)
+    own = system.period
+    if own is None:
+        return sp.Float(value)
+    # The same multiple of the system's own period at any parameter values.
+    return value * own / own.xreplace(values)
 
 
 def _positive(name: str, value) -> float:
@@ -546,7 +626,7 @@ def kapitza_pendulum(amplitude: float = 0.05, frequency: float = 100.0, mass: fl
     # The pivot is a massless point, so that the drawings show it shaking.
     model = mechanical_system([th], values, points=[(sp.Integer(0), pivot_y), bob],
                               masses=[0, m], gravity=grav, joints=[(0, 1)],
-                              name="the Kapitza pendulum", period=2 * math.pi / frequency)
+                              name="the Kapitza pendulum", period=2 * sp.pi / w)
     return _made_by(model, "kapitza_pendulum", start=[math.pi - 0.3])
 
 

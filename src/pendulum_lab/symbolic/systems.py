@@ -279,6 +279,11 @@ class MechanicalSystem:
         Further generalized forces ``Q(q, q', t)``, one per coordinate.
     joints : sequence of (i, j) pairs, optional
         Points drawn joined by a rod (point indices; ``-1`` is the origin); for drawings only.
+        When neither ``joints`` nor ``springs`` is given, they are read from the points: a
+        point at a fixed distance from an earlier point or the origin hangs from it; one at a
+        fixed distance from a place that only the time moves (a shaken pivot) hangs from
+        that place, added to ``points`` as a massless point. Give ``joints=[]`` to draw no
+        rod.
     springs : sequence of (i, j) pairs, optional
         Points drawn joined by a spring (as ``joints``); for drawings only.
     name : str
@@ -368,6 +373,8 @@ class MechanicalSystem:
             self.potential = -rest
         self.joints = self._pairs("joints", joints)
         self.springs = self._pairs("springs", springs)
+        if joints is None and springs is None and self.points:
+            self._infer_suspension()
         self.dissipation = self._expr("dissipation", dissipation)
         if forces is None:
             extra = sp.zeros(n, 1)
@@ -473,6 +480,35 @@ class MechanicalSystem:
                     f"{len(self.points) - 1} (or -1, the origin)")
             found.append((i, j))
         return found
+
+    def _infer_suspension(self) -> None:
+        """Rods for the drawing, when neither ``joints`` nor ``springs`` were given: a point
+        kept at a fixed distance from an earlier point, or else from the origin, hangs from
+        it on a rod; one kept at a fixed distance from the place its position gives at
+        ``q = 0`` terms only (the part of it the coordinates do not move, such as a shaken
+        pivot's ``a cos(w t)``) hangs from that place, added as a massless point after the
+        given ones (so that a pendulum whose pivot moves is drawn with its rod and pivot)."""
+        moved = set(self.q)
+
+        def fixed_distance(dx, dy) -> bool:
+            if not (sp.sympify(dx).free_symbols | sp.sympify(dy).free_symbols) & moved:
+                return False  # nothing between them moves: not an arm
+            square = sp.trigsimp(sp.expand(dx ** 2 + dy ** 2))
+            return square != 0 and not square.free_symbols & moved
+
+        given = list(self.points)
+        for k, (x, y) in enumerate(given):
+            anchors = [(j, given[j]) for j in range(k)] + [(-1, (0, 0))]
+            hung = next((j for j, (ax, ay) in anchors if fixed_distance(x - ax, y - ay)), None)
+            if hung is not None:
+                self.joints.append((hung, k))
+                continue
+            pivot = tuple(sp.Add(*(term for term in sp.Add.make_args(sp.expand(c))
+                                   if not term.free_symbols & moved)) for c in (x, y))
+            if any(c != 0 for c in pivot) and fixed_distance(x - pivot[0], y - pivot[1]):
+                self.points.append(pivot)
+                self.masses.append(sp.Integer(0))
+                self.joints.append((len(self.points) - 1, k))
 
     def _rate(self, expr) -> sp.Expr:
         """``d expr / dt`` along a motion: ``sum dexpr/dq_i q'_i + dexpr/dt``."""
@@ -683,6 +719,42 @@ class MechanicalSystem:
             if self.t in term.free_symbols:
                 clock |= {str(s) for s in term.free_symbols - {self.t}}
         return tuple(str(s) for s in self.parameters if str(s) in clock)
+
+    @functools.cached_property
+    def period(self) -> sp.Expr | None:
+        """The period of the time dependence as an expression of the parameters
+        (``2*pi/w`` for the Kapitza pendulum), or None: autonomous, or not periodic in ``t``
+        in a way found here (each function of ``t`` periodic, their periods in rational
+        ratios, ``t`` nowhere else).
+
+        Examples
+        --------
+        >>> th, t = sp.symbols("theta t", real=True)
+        >>> w, l = sp.symbols("w l", positive=True)
+        >>> s = MechanicalSystem([th], {w: 10.0, l: 1.0}, masses=[1], gravity=9.81,
+        ...                      points=[(l * sp.sin(th), sp.cos(w * t) + sp.sin(3 * w * t / 2)
+        ...                               - l * sp.cos(th))])
+        >>> s.period
+        4*pi/w
+        """
+        from sympy.calculus.util import periodicity
+
+        if self.autonomous:
+            return None
+        timed = {f for e in self._dynamics for f in e.atoms(sp.Function)
+                 if self.t in f.free_symbols}
+        stand_ins = {f: sp.Dummy() for f in timed}
+        if any(self.t in e.xreplace(stand_ins).free_symbols for e in self._dynamics):
+            return None  # t outside a function (a ramp, a polynomial in t)
+        periods = [periodicity(f, self.t) for f in timed]
+        if not periods or any(p is None or p == 0 for p in periods):
+            return None
+        base = periods[0]
+        multiples = [sp.nsimplify(sp.simplify(p / base)) for p in periods]
+        if any(not (m.is_Rational and m > 0) for m in multiples):
+            return None  # incommensurate periods: no common period
+        return sp.simplify(base * math.lcm(*(int(m.p) for m in multiples))
+                           / math.gcd(*(int(m.q) for m in multiples)))
 
     @property
     def separable(self) -> bool:

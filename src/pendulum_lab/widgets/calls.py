@@ -4,7 +4,9 @@ An instrument prepares a :class:`SimulateCall` from its controls (the
 model, the initial state, ``t_end``, ``dt`` and the method), runs it, and
 offers its :meth:`~SimulateCall.code`: the ``pl.simulate(...)`` call that a
 student pastes into a cell to get the same trajectory, number for number
-(every float is written with ``repr``, which reads back exactly).
+(every float is written with ``repr``, which reads back exactly), followed by the
+plotting call that draws it as the instrument does (:func:`panels_code` for panels), the
+figure as the cell's last value so that the pasted cell shows it.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import numpy as np
 from ..driver.simulate import Trajectory, simulate
 from ..model import PendulumModel
 
-__all__ = ["SimulateCall", "model_code", "numbers"]
+__all__ = ["SimulateCall", "model_code", "numbers", "panels_code"]
 
 
 def numbers(values) -> str:
@@ -78,6 +80,38 @@ mass=1.0, length=1.0, g=1.0)'
             f"g={g!r}{extra})")
 
 
+def panels_code(panels, columns: int | None = None) -> str:
+    """Source that draws ``traj`` of ``model`` in the explorers' panels, one axes each, in
+    ``columns`` columns (all in one row by default); the figure is its last line's value.
+
+    ``panels``: names of :data:`pendulum_lab.plotting.PANELS` or functions
+    ``(ax, traj, model)`` (written by their name, as the student defined them).
+
+    Examples
+    --------
+    >>> print(panels_code(["pendulum", "energy"]))
+    # The picture: each panel drawn into its axes
+    fig, axes = pl.plotting.new_figure(1, 2, width=12.0)
+    panels = [pl.plotting.PANELS['pendulum'], pl.plotting.PANELS['energy']]
+    for ax, panel in zip(fig.axes, panels):
+        panel(ax, traj, model)
+    fig
+    <BLANKLINE>
+    """
+    drawers = [f"pl.plotting.PANELS[{panel!r}]" if isinstance(panel, str)
+               else getattr(panel, "__name__", "my_panel") for panel in panels]
+    columns = columns or len(drawers)
+    rows = -(-len(drawers) // columns)
+    spare = ("for ax in fig.axes[len(panels):]:\n    ax.remove()  # a grid cell left empty\n"
+             if rows * columns > len(drawers) else "")
+    return ("# The picture: each panel drawn into its axes\n"
+            f"fig, axes = pl.plotting.new_figure({rows}, {columns}, width=12.0)\n"
+            f"panels = [{', '.join(drawers)}]\n"
+            "for ax, panel in zip(fig.axes, panels):\n"
+            "    panel(ax, traj, model)\n"
+            f"{spare}fig\n")
+
+
 @dataclass(frozen=True)
 class SimulateCall:
     """One :func:`pendulum_lab.simulate` call: what an instrument runs and what it copies.
@@ -110,8 +144,9 @@ class SimulateCall:
         return (f"{numbers(self.theta0)}, {numbers(self.omega0)}, t_end={float(self.t_end)!r}, "
                 f"dt={float(self.dt)!r}, method={self.method!r}")
 
-    def code(self) -> str:
-        """Source that computes the same trajectory, as ``traj``.
+    def code(self, drawing: str = "") -> str:
+        """Source that computes the same trajectory, as ``traj``, then ``drawing`` (source
+        that draws it, such as :func:`panels_code`), after an empty line.
 
         Examples
         --------
@@ -129,4 +164,4 @@ class SimulateCall:
             "import pendulum_lab as pl\n\n"
             f"model = {model_code(self.model)}\n"
             f"traj = pl.simulate(model, {self.arguments()})\n"
-        )
+        ) + ("\n" + drawing if drawing else "")

@@ -431,6 +431,7 @@ class SectionExplorer(ClickExplorer):
             "# Its crossings, the points drawn (after the clicked one):\n"
             f"section = chaos.poincare_section(model, theta0, omega0, {arguments})\n"
             "theta2, p2 = section.coordinates()\n"
+            "section.plot()\n"
         )
         return points, label, code
 
@@ -547,6 +548,8 @@ class PortraitExplorer(ClickExplorer):
         code = call.code() + (
             "# The curve drawn: angles wrapped into (-pi, pi]\n"
             "theta, omega = pl.plotting.wrap_angle(traj.theta[:, 0]), traj.omega[:, 0]\n"
+            "# drawn on the phase portrait:\n"
+            "pl.plotting.plot_phase_portrait(model, trajectory=traj)\n"
         )
         return points, label, code
 

@@ -24,6 +24,7 @@ from collections.abc import Sequence
 
 import ipywidgets as widgets
 import numpy as np
+import traitlets
 from sympy import pretty
 
 from .. import validation as check
@@ -39,12 +40,14 @@ __all__ = [
     "MAX_STEPS",
     "SIMULATOR_T_END",
     "SPEEDS",
+    "StepControl",
     "build_simulator",
     "call_from_controls",
     "check_method",
     "check_steps",
     "column",
     "control_names",
+    "energy_changers",
     "energy_is_conserved",
     "forces_text",
     "methods_for",
@@ -72,6 +75,74 @@ SIMULATOR_T_END = (1.0, 60.0)
 
 DESCRIPTION_WIDTH = "88px"
 SLIDER_WIDTH = "310px"
+
+
+#: The smallest and largest step the ``dt`` box takes [s] (a typed value is clamped).
+DT_LIMITS = (1e-5, 1.0)
+
+
+class StepControl(widgets.HBox):
+    """The step ``dt`` [s]: a ladder slider (:data:`DT_CHOICES`, for dragging) and, at its
+    right end where a slider shows its value, a box where any step can be typed.
+
+    ``value`` is the step of record: a drag sets it to a rung, a value typed into the box
+    (committed by Enter) sets it as typed (clamped to :data:`DT_LIMITS`), and setting it from
+    code moves both. Off the ladder, the slider rests on the nearest rung (on a log scale)
+    while the box shows the value. (A ``SelectionSlider``'s own value box lets one type but
+    does nothing with it: the run was not redone and the box kept the typed text.)
+    """
+
+    value = traitlets.Float()
+
+    def __init__(self, value: float, choices=DT_CHOICES, description: str = "Δt (s)"):
+        value = float(value)
+        self._choices = tuple(sorted({float(c) for c in choices}))
+        self.ladder = widgets.SelectionSlider(
+            options=[(f"{v:g}", v) for v in self._choices],
+            value=self._nearest(value),
+            description=description,
+            readout=False,
+            continuous_update=False,
+            style={"description_width": DESCRIPTION_WIDTH},
+            layout=widgets.Layout(flex="1 1 auto", width="auto"),
+        )
+        low, high = DT_LIMITS
+        self.box = widgets.BoundedFloatText(
+            value=value, min=min(low, value), max=max(high, value), step=None,
+            continuous_update=False, layout=widgets.Layout(width="70px"),
+        )
+        self.box.add_class("plab-step-box")
+        super().__init__([self.ladder, self.box], layout=widgets.Layout(width=SLIDER_WIDTH))
+        self.add_class("plab-step-control")
+        self.value = value
+        self._syncing = False
+        self.ladder.observe(self._from_ladder, names="value")
+        self.box.observe(self._from_box, names="value")
+        self.observe(self._to_parts, names="value")
+
+    def _nearest(self, value: float) -> float:
+        return min(self._choices, key=lambda rung: abs(math.log(rung / value)))
+
+    def _from_ladder(self, change) -> None:
+        if not self._syncing:
+            self.value = float(change["new"])
+
+    def _from_box(self, change) -> None:
+        if not self._syncing:
+            self.value = float(change["new"])
+
+    def _to_parts(self, change) -> None:
+        value = float(change["new"])
+        self._syncing = True
+        try:
+            self.box.value = value
+            self.ladder.value = self._nearest(value)
+        finally:
+            self._syncing = False
+
+    @property
+    def description(self) -> str:
+        return self.ladder.description
 
 
 def control_names(n: int) -> dict[str, list[str]]:
@@ -225,6 +296,39 @@ def energy_is_conserved(model: PendulumModel) -> bool:
     return model.is_conservative and model.is_autonomous
 
 
+def _system_time_dependence(model) -> tuple[bool, bool]:
+    """Whether a system's points move with the time (its Lagrangian reads ``t``), and
+    whether its generalized forces read ``t`` (a drive)."""
+    system, t = model.system, model.system.t
+    return (t in system.lagrangian.free_symbols,
+            any(t in force.free_symbols for force in system.generalized_forces))
+
+
+def energy_changers(model: PendulumModel) -> str:
+    """What changes the model's energy, in words (``"the damping and the drive"``, ``"the
+    moving point"``: a point the time moves, such as a shaken pivot), or ``""`` for a model
+    that conserves it.
+
+    Examples
+    --------
+    >>> import pendulum_lab as pl
+    >>> energy_changers(pl.driven_pendulum()), energy_changers(pl.kapitza_pendulum())
+    ('the damping and the drive', 'the moving point')
+    >>> energy_changers(pl.double_pendulum())
+    ''
+    """
+    if model.is_chain:
+        parts = [name for name, present in (("the damping", not model.is_conservative),
+                                             ("the drive", not model.is_autonomous)) if present]
+    else:
+        moving, driven = _system_time_dependence(model)
+        parts = [name for name, present in (
+            ("the moving point", moving),
+            ("the time-dependent forces" if driven else "the forces Q", not model.is_conservative),
+        ) if present]
+    return " and ".join(parts)
+
+
 def forces_text(model: PendulumModel) -> str:
     """The model's damping and drive in words, with units (``"no damping, no drive"``).
 
@@ -234,14 +338,20 @@ def forces_text(model: PendulumModel) -> str:
     >>> forces_text(pl.driven_pendulum())
     'damping 0.5 N m s/rad, drive 1.2 cos(0.6667 t) N m'
     >>> forces_text(pl.kapitza_pendulum())
-    'no forces besides the potential, depends on t (period 0.06283 s)'
+    'no damping or applied forces, a point moved with the time (period 0.06283 s)'
+    >>> forces_text(pl.elastic_pendulum())
+    'no damping or applied forces'
     """
     if not model.is_chain:
-        parts = ["no forces besides the potential" if model.is_conservative
+        moving, driven = _system_time_dependence(model)
+        parts = ["no damping or applied forces" if model.is_conservative
                  else f"forces {model.damping}"]
-        if not model.is_autonomous:
-            period = model.drive_period
-            parts.append("depends on t" + ("" if period is None else f" (period {period:.4g} s)"))
+        period = model.drive_period
+        every = "" if period is None else f" (period {period:.4g} s)"
+        if moving:
+            parts.append("a point moved with the time" + every)
+        elif driven:
+            parts.append("forces that depend on t" + every)
         return ", ".join(parts)
     coefficients = {float(c) for c in model.damping}
     if model.is_conservative:
@@ -282,14 +392,7 @@ def run_controls(
             style={"description_width": DESCRIPTION_WIDTH},
             layout=widgets.Layout(width=SLIDER_WIDTH),
         ),
-        "dt": widgets.SelectionSlider(
-            options=[(f"{v:g}", v) for v in choices],
-            value=float(dt),
-            description="Δt (s)",
-            continuous_update=False,
-            style={"description_width": DESCRIPTION_WIDTH},
-            layout=widgets.Layout(width=SLIDER_WIDTH),
-        ),
+        "dt": StepControl(float(dt), choices),
         "t_end": slider(float(t_end), *t_end_range, 0.1, "t_end (s)", ".1f"),
     }
 

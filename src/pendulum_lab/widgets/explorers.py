@@ -23,7 +23,7 @@ from ..analysis import equilibrium_angles, find_equilibrium, rest_state_at_energ
 from ..model import require_model
 from ..model.pendulum import PendulumModel
 from .background import BackgroundCache
-from .calls import SimulateCall
+from .calls import SimulateCall, panels_code
 from .controls import (
     DESCRIPTION_WIDTH,
     SLIDER_WIDTH,
@@ -89,6 +89,10 @@ class Explorer(Instrument):
 
     def prepare(self) -> SimulateCall:
         return call_from_controls(self.model, self.controls)
+
+    def drawing_code(self) -> str:
+        return panels_code([name if plotting.PANELS.get(name) is function else function
+                            for name, function in self.panels], self._cols)
 
     def redraw(self) -> None:
         # Building axes and their ticks is most of a redraw: on an update, keep
@@ -346,6 +350,11 @@ class EquilibriumExplorer(Instrument):
 
         return call_from_controls(self.model, self.controls, origin=origin)
 
+    def drawing_code(self) -> str:
+        return ("# The picture: the linearised and the nonlinear motion side by side\n"
+                "pl.plotting.plot_linear_vs_nonlinear(model, "
+                f"{self.equilibrium.name!r}, traj)\n")
+
     def draw(self, figure):
         left = figure.add_subplot(1, 2, 1)
         right = figure.add_subplot(1, 2, 2, sharey=left)
@@ -457,6 +466,13 @@ class EnergyExplorer(Instrument):
         theta0 = rest_state_at_energy(self.model, c["energy"].value)
         return SimulateCall(self.model, theta0, np.zeros(self.model.n), t_end=c["t_end"].value,
                             dt=c["dt"].value, method=c["method"].value)
+
+    def drawing_code(self) -> str:
+        if self.model.n == 1:
+            return ("# The picture: the run on the phase portrait\n"
+                    "pl.plotting.plot_phase_portrait(model, trajectory=traj)\n")
+        return ("# The picture: each link's projection (theta_i, omega_i)\n"
+                "pl.plotting.plot_link_projections(traj)\n")
 
     def draw(self, figure):
         axes = [figure.add_subplot(1, self._cols, k + 1) for k in range(self._cols)]

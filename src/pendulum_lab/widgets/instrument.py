@@ -40,8 +40,8 @@ from ..driver.simulate import Trajectory, step_count
 from ..integrators import ConvergenceError
 from ..model.pendulum import PendulumModel
 from ..plotting.png import png_bytes
-from .calls import SimulateCall
-from .controls import column, energy_is_conserved, forces_text
+from .calls import SimulateCall, panels_code
+from .controls import column, energy_changers, energy_is_conserved, forces_text
 from .status import StatusLine
 
 __all__ = [
@@ -78,6 +78,9 @@ REOPEN_HINT = (
     "</style>"
 )
 
+
+#: CSS class of the row of control columns (``static/live.css`` lets it wrap).
+CONTROLS_CLASS = "plab-controls"
 
 class WidgetWithPicture:
     """Displays as its ``widget``, with a still :meth:`picture` of it in the same display.
@@ -168,7 +171,11 @@ class Instrument(WidgetWithPicture):
             for title, keys in columns
             if keys
         ]
-        children = [widgets.HBox(boxes), self.status]
+        row = widgets.HBox(boxes)
+        # Columns that do not fit beside each other wrap under each other (live.css): five
+        # parameters pushed the last column's controls past the right edge.
+        row.add_class(CONTROLS_CLASS)
+        children = [row, self.status]
         self.figure = self._canvas = self._image = None
         if figure:
             self.figure = Figure(figsize=(WIDTH, ROW_HEIGHT * rows), dpi=DPI)
@@ -214,8 +221,8 @@ class Instrument(WidgetWithPicture):
         largest = float(change[np.argmax(np.abs(np.nan_to_num(change)))])
         return run + (
             f"E − E(0) reached {largest:+.3g} J: energy is not conserved "
-            f"({forces_text(self.model)}), so this is the forces' work plus the method's "
-            "error, not an error alone"
+            f"({forces_text(self.model)}), so this is the work of "
+            f"{energy_changers(self.model)} plus the method's error, not an error alone"
         )
 
     def show(self) -> None:
@@ -267,8 +274,14 @@ class Instrument(WidgetWithPicture):
             yield
 
     def code(self) -> str:
-        """Source that computes the trajectory shown (``""`` before the first run)."""
-        return "" if self.call is None else self.call.code()
+        """Source that computes the trajectory shown and draws it (``""`` before the first
+        run)."""
+        return "" if self.call is None else self.call.code(self.drawing_code())
+
+    def drawing_code(self) -> str:
+        """Source that draws ``traj`` of ``model`` as this instrument's picture does (for
+        "copy as code"): the configuration and the energies, as the simulators show them."""
+        return panels_code(["pendulum", "energy"])
 
     def set_controls(self, values: Mapping[str, object]) -> bool:
         """Set several controls at once and recompute once; return whether the update succeeded.
@@ -336,7 +349,7 @@ class Instrument(WidgetWithPicture):
         except EXPECTED_ERRORS as err:
             self.set_message(f"Could not show the run: {err}", "error")
             return False
-        self.status.code = call.code()
+        self.status.code = self.code()
         # The driver's own warning (a blow-up) says what happened; NumPy's
         # "overflow encountered in ..." that may follow it adds nothing.
         notes = list(

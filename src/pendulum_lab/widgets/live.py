@@ -51,6 +51,7 @@ from .controls import (
     build_simulator,
     call_from_controls,
     control_names,
+    energy_changers,
     energy_is_conserved,
     forces_text,
     pendulum_controls,
@@ -103,9 +104,11 @@ def run_messages(
     between sent states), ``dt``, ``stride``, ``steps``, ``method``,
     ``energy0``, ``energy_range`` (bar scale, including 0), ``error_max``
     (largest ``|E - E(0)|`` over every step), ``completed``, ``conserved``
-    (whether the model conserves energy: else ``E - E(0)`` is the work of its
-    damping and drive plus the method's error, and the browser says so) and
-    ``forces`` (:func:`~pendulum_lab.widgets.controls.forces_text`).
+    (whether the model conserves energy: else ``E - E(0)`` is the work of
+    ``changed_by`` plus the method's error, and the browser says so:
+    :func:`~pendulum_lab.widgets.controls.energy_changers`, such as "the damping and the
+    drive" or "the point moved with the time") and ``forces``
+    (:func:`~pendulum_lab.widgets.controls.forces_text`).
 
     Parameters
     ----------
@@ -169,6 +172,7 @@ def run_messages(
         "completed": bool(traj.completed),
         "conserved": energy_is_conserved(model),
         "forces": forces_text(model),
+        "changed_by": energy_changers(model),
     }
     messages = []
     for chunk, first in enumerate(range(0, len(kept), chunk_states)):

@@ -17,6 +17,7 @@
 const WIDTH = 900;
 const HEIGHT = 340;
 const CHAIN = 340; // the chain's square panel, at the left
+const READOUT_CHARS = 38; // characters of the readout's monospace lines that fit the canvas
 const COLOURS = {
   kinetic: "#1f77b4",
   potential: "#ff7f0e",
@@ -534,7 +535,20 @@ function render({ model, el }) {
       `step ${step} of ${meta.steps}`,
       `E − E(0) = ${seriesAt(run.error, 1, 0, t).toExponential(2)} J`,
     ];
-    if (!meta.conserved) lines.push("energy not conserved: damping/drive");
+    if (!meta.conserved) {
+      // What changes the energy, in the kernel's words, wrapped to the readout's width.
+      lines[3] += ", not conserved";
+      let line = "by";
+      for (const word of String(meta.changed_by || "its forces").split(" ")) {
+        if (line.length + 1 + word.length > READOUT_CHARS) {
+          lines.push(line);
+          line = word;
+        } else {
+          line = `${line} ${word}`;
+        }
+      }
+      lines.push(line);
+    }
     if (!meta.completed) lines.push("the run stopped: the state became non-finite");
     c.fillStyle = COLOURS.text;
     c.font = "13px monospace";
