@@ -1,4 +1,4 @@
-# The two commands of the README:
+# The contributors' two commands of the README (students use open_course.py, which needs no make):
 #   make lab    create the environment if needed and open JupyterLab on the course
 #               (options for JupyterLab: make lab ARGS="--no-browser --port 8899")
 #   make test   create or update the environment and run the whole test suite, and the unit
