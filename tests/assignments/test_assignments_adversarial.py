@@ -272,7 +272,8 @@ def _otter_run(kit, notebook, work: Path) -> float:
                str(tool.autograder_zip(kit.folders[A2])), "-o", str(work), "--no-logo", str(path)]
     subprocess.run(command, cwd=work, capture_output=True, timeout=900, check=False)
     time.sleep(2.0)  # the racing process writes right after otter
-    return json.loads((work / "results.json").read_text())["score"]
+    tests = json.loads((work / "results.json").read_text())["tests"]
+    return sum(test.get("score") or 0.0 for test in tests)
 
 
 def test_control_plain_otter_takes_the_forged_scores(kit, arena):
