@@ -103,8 +103,9 @@ def _vandal(canary: Path, earlier: Path, secret: Path, dist: Path, port: int) ->
             print("vandal: sent to the network")
         except OSError as err:
             print("vandal: no network:", type(err).__name__)
-        # Detached twice: the shell exits at once, and the sleep leaves the process tree.
-        subprocess.Popen(["sh", "-c", "sleep {LEFTOVER}1 >/dev/null 2>&1 &"]).wait()
+        # Detached: a session of its own (out of the kernel's process group), and the shell
+        # exits at once, so that the sleep leaves the process tree too.
+        subprocess.Popen(["sh", "-c", "setsid sleep {LEFTOVER}1 >/dev/null 2>&1 &"]).wait()
         """)
 
 
