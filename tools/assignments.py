@@ -475,23 +475,30 @@ def _run_submission(config: dict) -> int:
 
     from nbclient import NotebookClient
     from nbclient.exceptions import CellTimeoutError, DeadKernelError
+    from nbclient.util import run_sync  # the kernel manager's methods are coroutines
 
     work = Path(config["work"])
     notebook = nbformat.read(work / config["notebook"], as_version=4)
     cell_seconds = float(config["cell_seconds"])
 
     class Client(NotebookClient):
-        """nbclient, with each cell's kept output bounded."""
+        """nbclient, with each cell's kept output bounded (a kernel sends a stream in pieces
+        of any size: each piece is cut to what is left of the cell's allowance)."""
 
         def output(self, outs, msg, display_id, cell_index):
-            kept = sum(len(json.dumps(out)) for out in outs)
-            if kept > OUTPUT_CHARS:
-                if not any(DROPPED_OUTPUT in str(out.get("text", "")) for out in outs):
-                    outs.append(nbformat.v4.new_output(
-                        "stream", name="stderr",
-                        text=f"[{DROPPED_OUTPUT} after {OUTPUT_CHARS} characters]"))
+            left = OUTPUT_CHARS - sum(len(json.dumps(out)) for out in outs)
+            if left <= 0:
                 return None
-            return super().output(outs, msg, display_id, cell_index)
+            out = super().output(outs, msg, display_id, cell_index)
+            if outs and len(json.dumps(outs[-1])) > left:
+                if outs[-1].get("output_type") == "stream":
+                    outs[-1]["text"] = outs[-1]["text"][:left]
+                else:
+                    outs.pop()
+                outs.append(nbformat.v4.new_output(
+                    "stream", name="stderr",
+                    text=f"[{DROPPED_OUTPUT} after {OUTPUT_CHARS} characters]"))
+            return out
 
     def send(message: dict) -> None:
         protocol.write(json.dumps(message) + "\n")
@@ -520,7 +527,7 @@ def _run_submission(config: dict) -> int:
     def responsive(client) -> bool:
         """Interrupt the kernel, and see whether it comes back within the grace time."""
         with contextlib.suppress(Exception):
-            client.km.interrupt_kernel()
+            run_sync(client.km.interrupt_kernel)()
         client.timeout = INTERRUPT_GRACE_SECONDS
         try:
             run_extra(client, "pass")
@@ -564,7 +571,7 @@ def _run_submission(config: dict) -> int:
                      "the kernel was stopped and the notebook run again without that cell")
         skipped.add(stuck)
         with contextlib.suppress(Exception):
-            client.km.shutdown_kernel(now=True)
+            run_sync(client.km.shutdown_kernel)(now=True)
         for cell in notebook.cells:
             if cell.cell_type == "code":
                 cell.outputs = []
@@ -608,7 +615,7 @@ def _run_submission(config: dict) -> int:
             continue
         send(json.loads(reply_path.read_text()))
     with contextlib.suppress(Exception):
-        client.km.shutdown_kernel(now=True)
+        run_sync(client.km.shutdown_kernel)(now=True)
     return 0
 
 

@@ -103,8 +103,9 @@ def _vandal(canary: Path, earlier: Path, secret: Path, dist: Path, port: int) ->
             print("vandal: sent to the network")
         except OSError as err:
             print("vandal: no network:", type(err).__name__)
-        # Detached twice: the shell exits at once, and the sleep leaves the process tree.
-        subprocess.Popen(["sh", "-c", "sleep {LEFTOVER}1 >/dev/null 2>&1 &"]).wait()
+        # Detached: a session of its own (out of the kernel's process group), and the shell
+        # exits at once, so that the sleep leaves the process tree too.
+        subprocess.Popen(["sh", "-c", "setsid sleep {LEFTOVER}1 >/dev/null 2>&1 &"]).wait()
         """)
 
 
@@ -272,7 +273,8 @@ def _otter_run(kit, notebook, work: Path) -> float:
                str(tool.autograder_zip(kit.folders[A2])), "-o", str(work), "--no-logo", str(path)]
     subprocess.run(command, cwd=work, capture_output=True, timeout=900, check=False)
     time.sleep(2.0)  # the racing process writes right after otter
-    return json.loads((work / "results.json").read_text())["score"]
+    tests = json.loads((work / "results.json").read_text())["tests"]
+    return sum(test.get("score") or 0.0 for test in tests)
 
 
 def test_control_plain_otter_takes_the_forged_scores(kit, arena):
