@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import importlib.util
 import json
 import os
 import pickle
@@ -144,9 +145,12 @@ def package_wheel() -> tuple[str, bytes]:
     """The course's package as a wheel: its file name and its bytes (built once per process)."""
     if not _WHEEL:
         with tempfile.TemporaryDirectory(prefix="wheel-") as folder:
+            # With the build backend at hand (the assignments extra) nothing is downloaded.
+            isolation = ([] if importlib.util.find_spec("hatchling") is None
+                         else ["--no-build-isolation"])
             completed = subprocess.run(
-                [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", "-w", folder,
-                 str(REPO_ROOT)], capture_output=True, text=True, check=False)
+                [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", *isolation,
+                 "-w", folder, str(REPO_ROOT)], capture_output=True, text=True, check=False)
             wheels = sorted(Path(folder).glob("pendulum_lab-*.whl"))
             if completed.returncode != 0 or len(wheels) != 1:
                 raise RuntimeError(f"building the package's wheel failed:\n{completed.stderr}")
