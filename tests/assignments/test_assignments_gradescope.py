@@ -87,8 +87,9 @@ def test_the_zip_installs_what_its_hidden_tests_import_and_grades(kit, tmp_path)
     venv_python = venv / "bin" / "python"
     (source / "pip-part.txt").write_text("\n".join(pip) + "\n")
     # As conda does with environment.yml's pip part: one requirements file, run where the zip
-    # was unpacked.
-    _run([str(venv_python), "-m", "pip", "install", "--quiet", "-r", "pip-part.txt"], source)
+    # was unpacked (without compiling every module to bytecode: that is only time here).
+    _run([str(venv_python), "-m", "pip", "install", "--quiet", "--no-compile", "-r",
+          "pip-part.txt"], source)
 
     solutions = kit.folders[NAME] / "autograder" / f"{NAME}.ipynb"
     graded = _grade(venv_python, autograder, solutions, tmp_path / "graded")
