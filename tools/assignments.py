@@ -46,6 +46,7 @@ import argparse
 import contextlib
 import csv
 import hashlib
+import importlib.util
 import json
 import os
 import queue
@@ -132,8 +133,59 @@ def build(master: Path, dist: Path = DIST) -> Path:
     expected = [out / "student" / master.name, out / "autograder" / master.name]
     if completed.returncode != 0 or not all(path.exists() for path in expected):
         raise RuntimeError(f"otter assign failed on {master.name}:\n{log}")
-    autograder_zip(out)  # exactly one
+    add_package(autograder_zip(out))  # exactly one zip, then the course's package in it
     return out
+
+
+#: Where the package's wheel goes inside the autograder zip, and how its requirements name it:
+#: relative to the folder the zip is unpacked in (Gradescope's /autograder/source), which is
+#: where conda runs the pip part of environment.yml, and where requirements.txt lies.
+WHEEL_FOLDER = "files"
+_WHEEL: dict[str, bytes] = {}  # file name -> contents: built once per process
+
+
+def package_wheel() -> tuple[str, bytes]:
+    """The course's package as a wheel: its file name and its bytes (built once per process)."""
+    if not _WHEEL:
+        with tempfile.TemporaryDirectory(prefix="wheel-") as folder:
+            # With the build backend at hand (the assignments extra) nothing is downloaded.
+            isolation = ([] if importlib.util.find_spec("hatchling") is None
+                         else ["--no-build-isolation"])
+            completed = subprocess.run(
+                [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", *isolation,
+                 "-w", folder, str(REPO_ROOT)], capture_output=True, text=True, check=False)
+            wheels = sorted(Path(folder).glob("pendulum_lab-*.whl"))
+            if completed.returncode != 0 or len(wheels) != 1:
+                raise RuntimeError(f"building the package's wheel failed:\n{completed.stderr}")
+            _WHEEL[wheels[0].name] = wheels[0].read_bytes()
+    return next(iter(_WHEEL.items()))
+
+
+def add_package(zip_path: Path) -> None:
+    """Put the course's package into an autograder zip, as Gradescope needs it.
+
+    The hidden tests import ``pendulum_lab``, which no public index serves: its wheel goes into
+    the zip (``files/``), ``requirements.txt`` names it, and so does the pip part of the zip's
+    ``environment.yml`` (what Gradescope's image installs), beside otter-grader; the wheel's
+    own requirements bring NumPy, SciPy, SymPy and Numba.
+    """
+    import yaml  # otter-grader's dependency
+
+    name, contents = package_wheel()
+    requirement = f"./{WHEEL_FOLDER}/{name}"
+    with zipfile.ZipFile(zip_path) as archive:
+        entries = {entry: archive.read(entry) for entry in archive.namelist()}
+    environment = yaml.safe_load(entries["environment.yml"])
+    pip = next(item["pip"] for item in environment["dependencies"] if isinstance(item, dict))
+    pip.append(requirement)
+    entries["environment.yml"] = yaml.safe_dump(environment, sort_keys=False).encode("utf-8")
+    entries["requirements.txt"] = f"{requirement}\n".encode()
+    entries[f"{WHEEL_FOLDER}/{name}"] = contents
+    rebuilt = zip_path.with_suffix(".tmp")
+    with zipfile.ZipFile(rebuilt, "w", zipfile.ZIP_DEFLATED) as archive:
+        for entry, data in entries.items():
+            archive.writestr(entry, data)
+    rebuilt.replace(zip_path)
 
 
 def autograder_zip(folder: Path) -> Path:
