@@ -105,7 +105,8 @@ def bench_grading(copies: int, serial: int, jobs: int, otter_copies: int) -> dic
                                check=False)
             result["plain otter run s per submission"] = round(
                 (time.perf_counter() - start) / otter_copies, 2)
-            tests = json.loads((path.parent / "results.json").read_text()).get("tests", [])
+            results = (path.parent / "results.json").read_text(encoding="utf-8")
+            tests = json.loads(results).get("tests", [])
             result["plain otter score"] = sum(test.get("score", 0) for test in tests)
         result["load at end"] = round(os.getloadavg()[0], 1) if hasattr(os, "getloadavg") \
             else float("nan")

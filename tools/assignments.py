@@ -128,6 +128,7 @@ def build(master: Path, dist: Path = DIST) -> Path:
     command = [sys.executable, "-m", "otter", "assign", "--no-pdfs", "--no-run-tests",
                master.name, str(out)]
     completed = subprocess.run(command, cwd=master.parent, capture_output=True, text=True,
+                               encoding="utf-8", errors="replace",
                                env={**os.environ, "PYTHONWARNINGS": "ignore"}, check=False)
     log = completed.stdout + completed.stderr
     expected = [out / "student" / master.name, out / "autograder" / master.name]
@@ -153,7 +154,8 @@ def package_wheel() -> tuple[str, bytes]:
                          else ["--no-build-isolation"])
             completed = subprocess.run(
                 [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", *isolation,
-                 "-w", folder, str(REPO_ROOT)], capture_output=True, text=True, check=False)
+                 "-w", folder, str(REPO_ROOT)], capture_output=True, text=True,
+                encoding="utf-8", errors="replace", check=False)
             wheels = sorted(Path(folder).glob("pendulum_lab-*.whl"))
             if completed.returncode != 0 or len(wheels) != 1:
                 raise RuntimeError(f"building the package's wheel failed:\n{completed.stderr}")
@@ -375,7 +377,7 @@ def _read_only_sources() -> list[Path]:
                if entry and Path(entry).is_absolute()]
     for packages in site.getsitepackages():
         for pth in Path(packages).glob("*.pth"):
-            for line in pth.read_text(errors="replace").splitlines():
+            for line in pth.read_text(encoding="utf-8", errors="replace").splitlines():
                 if line.startswith("/") and Path(line.strip()).is_dir():
                     wanted.append(Path(line.strip()))
     kept = []
@@ -482,7 +484,7 @@ def _grader_install():
                 reply = {{"value": scope["encode_answer"](function(*args))}}
         except Exception as err:
             reply = {{"error": [type(err).__name__, str(err)[:1000]]}}
-        with open(reply_path, "w") as handle:
+        with open(reply_path, "w", encoding="utf-8") as handle:
             json.dump(reply, handle)
     return serve
 
@@ -665,7 +667,7 @@ def _run_submission(config: dict) -> int:
                       else "no reply")
             send({"error": ["GraderError", reason[:1000]]})
             continue
-        send(json.loads(reply_path.read_text()))
+        send(json.loads(reply_path.read_text(encoding="utf-8")))
     with contextlib.suppress(Exception):
         run_sync(client.km.shutdown_kernel)(now=True)
     return 0
@@ -852,7 +854,7 @@ def _check_submission(config: dict) -> int:
                       "requests to the kernel)")
     result = {"tests": tests, "score": sum(test["score"] for test in tests), "notes": notes,
               "conditions": conditions}
-    Path(config["result"]).write_text(json.dumps(result))
+    Path(config["result"]).write_text(json.dumps(result), encoding="utf-8")
     return 0
 
 
@@ -1047,7 +1049,7 @@ def grade(folder: Path, submission: Path, *, cell_seconds: float = CELL_SECONDS,
                   "cell_seconds": cell_seconds, "total_seconds": total_seconds,
                   "memory_mb": memory_mb, "processes": processes, "sandbox": sandbox,
                   "result": str(private / "result.json")}
-        (private / "check.json").write_text(json.dumps(config))
+        (private / "check.json").write_text(json.dumps(config), encoding="utf-8")
         process = subprocess.Popen(
             [sys.executable, str(Path(__file__).resolve()), "_check",
              str(private / "check.json")], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
@@ -1072,7 +1074,7 @@ def grade(folder: Path, submission: Path, *, cell_seconds: float = CELL_SECONDS,
             reason = ("not graded: the grading was interrupted" if _STOPPING.is_set() else
                       f"not graded: the checker stopped with an error:\n{tail}")
             return _zero(submission, possible, reason, time.perf_counter() - started)
-        results = json.loads(result_file.read_text())
+        results = json.loads(result_file.read_text(encoding="utf-8"))
         executed = None
         executed_file = work / "executed.ipynb"
         if executed_file.is_file() and executed_file.stat().st_size < 64 * 1024 * 1024:
@@ -1202,7 +1204,7 @@ def grade_class(folder: Path, submissions: dict[str, Path], out: Path, *, jobs: 
                   "into out/.kernel-cache) ...", flush=True)
             warm_cache(folder, limits["cache"], **{k: v for k, v in limits.items()
                                                     if k != "cache"})
-            (limits["cache"] / "ready").write_text("")
+            (limits["cache"] / "ready").write_text("", encoding="utf-8")
     _STOPPING.clear()
     graded: dict[str, Grade] = {}
     bar = tqdm(total=len(todo), unit="submission", disable=not progress, smoothing=0.05,
@@ -1218,7 +1220,7 @@ def grade_class(folder: Path, submissions: dict[str, Path], out: Path, *, jobs: 
                     result = future.result()
                     target = results_path(out, name)
                     target.parent.mkdir(parents=True, exist_ok=True)
-                    target.write_text(json.dumps(result.results, indent=1))
+                    target.write_text(json.dumps(result.results, indent=1), encoding="utf-8")
                     book.record(name, result, digests[name])
                     book.save()
                     graded[name] = result
@@ -1308,7 +1310,7 @@ def main(argv: list[str] | None = None) -> int:
     if argv[:1] == ["_run"]:  # inside the sandbox
         return _run_submission(json.loads(argv[1]))
     if argv[:1] == ["_check"]:
-        return _check_submission(json.loads(Path(argv[1]).read_text()))
+        return _check_submission(json.loads(Path(argv[1]).read_text(encoding="utf-8")))
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--dist", default=str(DIST),
                         help="built assignments (dist/assignments; relative to the current "

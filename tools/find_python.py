@@ -40,7 +40,7 @@ def probe(command: list[str], version: tuple[int, int]) -> str | None:
     """The absolute path of the interpreter ``command`` if it runs as Python ``version``."""
     try:
         done = subprocess.run([*command, "-c", _PROBE], capture_output=True, text=True,
-                              timeout=60, check=False)
+                              encoding="utf-8", timeout=60, check=False)
     except OSError:
         return None
     reported, _, executable = done.stdout.strip().partition(" ")
@@ -55,12 +55,12 @@ def pyenv_interpreter(version: tuple[int, int]) -> str | None:
     if pyenv is None:
         return None
     listed = subprocess.run([pyenv, "versions", "--bare"], capture_output=True, text=True,
-                            timeout=60, check=False).stdout.split()
+                            encoding="utf-8", timeout=60, check=False).stdout.split()
     pattern = re.compile(rf"^{version[0]}\.{version[1]}\.(\d+)$")
     patches = sorted((int(m.group(1)), name) for name in listed if (m := pattern.match(name)))
     for _, name in reversed(patches):
         prefix = subprocess.run([pyenv, "prefix", name], capture_output=True, text=True,
-                                timeout=60, check=False).stdout.strip()
+                                encoding="utf-8", timeout=60, check=False).stdout.strip()
         found = prefix and probe([str(Path(prefix) / "bin" / "python3")], version)
         if found:
             return found
