@@ -398,9 +398,11 @@ def sandbox_command(work: Path, cache: Path, command: list[str]) -> list[str]:
             return
         args.extend(["--bind" if writable else "--ro-bind", str(source), target])
 
+    # The private /tmp first: a read-only source may itself live under /tmp (a clone there,
+    # its environment in it), and a later tmpfs would hide it.
+    args += ["--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
     for source in _read_only_sources():
         bind(source, str(source))
-    args += ["--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp"]
     bind(Path(__file__).resolve(), SANDBOX_TOOL)
     bind(work, SANDBOX_WORK, writable=True)
     bind(cache, SANDBOX_CACHE, writable=True)

@@ -240,12 +240,14 @@ _DASK_FIRST_USE = textwrap.dedent("""\
     from pendulum_lab.codegen import cache
 
     without_locks = sys.argv[1] == "without_locks"
+    RUNNING = threading.Event()  # set when the first thread's module has started to run
     if without_locks:  # the negative control: no lock, and a module that takes a while to run
         cache._LOADING = cache._PARSING = contextlib.nullcontext()
         run_module = cache._execute
-        def slow(name, *args):
-            time.sleep(1.0)
-            return run_module(name, *args)
+        def slow(name, source, *args):
+            # the pause is inside the module, after it is registered in sys.modules
+            RUNNING.set()
+            return run_module(name, "import time as _t\\n_t.sleep(2.0)\\n" + source, *args)
         cache._execute = slow
     model = pl.double_pendulum(m2=0.75)  # first used here, in this process
     # Found through sys.modules: Dask pickles the task, and a lock cannot be pickled.
@@ -253,7 +255,9 @@ _DASK_FIRST_USE = textwrap.dedent("""\
 
     def first_use(k):
         if without_locks:
-            time.sleep(0.3 * k)  # the second comes while the first is running the module
+            if k:  # the second comes while the first is running the module
+                sys.modules["__main__"].RUNNING.wait(300)
+                time.sleep(0.3)
         else:
             sys.modules["__main__"].BARRIER.wait()  # both at once
         start = time.perf_counter()
