@@ -527,7 +527,6 @@ def _run_submission(config: dict) -> int:
     protocol = os.fdopen(os.dup(1), "w", encoding="utf-8")
     os.dup2(2, 1)  # nothing else may write to the checker's channel
     limits = _limit_resources(config["memory_mb"], config["processes"])
-    import asyncio
     import inspect
 
     from nbclient import NotebookClient
@@ -570,28 +569,13 @@ def _run_submission(config: dict) -> int:
         client.start_new_kernel_client()
         return client
 
-    def execute(client, cell, index: int) -> None:
-        """nbclient's execution of one cell, bounded from outside as well: after an interrupt
-        nbclient's own wait for the reply was seen to outlive its timeout (the kernel idle, the
-        reply never matched), so the grader does not rely on it alone."""
-        limit = (client.timeout or cell_seconds) + INTERRUPT_GRACE_SECONDS
-
-        async def bounded():
-            try:
-                await asyncio.wait_for(client.async_execute_cell(cell, index), limit)
-            except TimeoutError:
-                raise CellTimeoutError.error_from_timeout_and_cell(
-                    "no reply from the kernel", limit, cell) from None
-
-        run_sync(bounded)()
-
     def run_extra(client, source: str):
         """Run code that is not one of the notebook's cells (nbclient files each cell it runs
         in the notebook, so it stays there while it runs)."""
         cell = nbformat.v4.new_code_cell(source)
         notebook.cells.append(cell)
         try:
-            execute(client, cell, len(notebook.cells) - 1)
+            client.execute_cell(cell, len(notebook.cells) - 1)
         finally:
             notebook.cells.pop()
         return cell
@@ -624,7 +608,7 @@ def _run_submission(config: dict) -> int:
                            "interrupt, or ended the kernel")]
                 continue
             try:
-                execute(client, cell, index)
+                client.execute_cell(cell, index)
             except CellTimeoutError:
                 cell.outputs.append(nbformat.v4.new_output(
                     "error", ename="TimeoutError", traceback=[],
