@@ -74,8 +74,8 @@ assignments: $(VENV)/.installed-assignments
 lab: $(VENV)/.installed-lab
 	$(BIN)/pendulum-lab $(ARGS)
 
-# Two pytest processes side by side, one per core (tools/run_tests.py; --serial for one); the
-# unit suite in the floor environment takes the core of the first to end.
+# A queue of pytest jobs, two at a time, longest first (tools/run_tests.py; --serial for one):
+# the browser and the website, the core, the floors, the environments (Binder, the installs).
 test: $(VENV)/.installed-test $(FLOORS_BIN)/.installed $(MATHJAX)
 	$(BIN)/ruff check .
 	$(BIN)/python tools/run_tests.py --floors $(FLOORS_BIN)/python

@@ -22,7 +22,11 @@ How a submission is graded (``docs/instructors.md`` says it for instructors):
   (numbers, arrays as lists, SymPy expressions as ``srepr`` text parsed back with a whitelist,
   tuples, lists, dicts); a function answer becomes a stand-in that sends the arguments the test
   chose to the kernel and receives the result as JSON. So a score cannot be forged from the
-  notebook: whatever the student's code does, only its answers leave the sandbox.
+  notebook: whatever the student's code does, only its answers leave the sandbox. Requests
+  reach the kernel over a loopback socket (inside the sandbox's own network namespace) to a
+  loop that runs in the kernel once the notebook has run, so a test that calls a student's
+  step function a thousand times costs milliseconds, not a kernel execution per call; a call
+  that outlasts the cell's time is interrupted, and that function is not called again.
 - **The sandbox (Linux, bubblewrap).** The runner sees a read-only view of Python, its packages
   and this file, a private ``/tmp``, a private writable work folder with the notebook's copy and
   a copy of the compiled-kernel cache; no network, no home, no output folder, no other
@@ -465,34 +469,45 @@ def _new_group() -> dict:
 # It runs inside the sandbox, with the student's code in its kernel: everything it sends out is
 # treated as untrusted data by the checker.
 _KERNEL_TOOLS = '''
-def _grader_install():
-    import inspect, json, os
+def _grader_serve(port, token):
+    import json, socket
     sources = {sources!r}
     scope = {{}}
     for source in sources:
         exec(source, scope)
+    namespace = globals()
 
-    def serve(request, reply_path, namespace):
+    def answer(request):
         try:
             name = request["name"]
             if request["op"] == "get":
                 if name not in namespace:
-                    reply = {{"missing": True}}
-                else:
-                    reply = {{"value": scope["encode_answer"](namespace[name])}}
-            else:
-                function = namespace.get(name)
-                args = [scope["decode_answer"](arg) for arg in request["args"]]
-                reply = {{"value": scope["encode_answer"](function(*args))}}
+                    return {{"missing": True}}
+                return {{"value": scope["encode_answer"](namespace[name])}}
+            args = [scope["decode_answer"](arg) for arg in request["args"]]
+            return {{"value": scope["encode_answer"](namespace.get(name)(*args))}}
         except Exception as err:
-            reply = {{"error": [type(err).__name__, str(err)[:1000]]}}
-        with open(reply_path, "w", encoding="utf-8") as handle:
-            json.dump(reply, handle)
-    return serve
+            return {{"error": [type(err).__name__, str(err)[:1000]]}}
 
-
-_grader_serve = _grader_install()
-del _grader_install
+    connection = socket.create_connection(("127.0.0.1", port))
+    connection.sendall(token.encode() + b"\\n")
+    lines = connection.makefile("rb")
+    while True:
+        try:
+            line = lines.readline()
+        except KeyboardInterrupt:  # an interrupt that came just after a reply
+            continue
+        if not line:
+            break
+        request = json.loads(line)
+        if request.get("op") == "end":
+            break
+        try:
+            reply = answer(request)
+        except KeyboardInterrupt:  # the runner's interrupt at the end of the call's time
+            reply = {{"interrupted": True}}
+        connection.sendall(json.dumps(reply).encode() + b"\\n")
+    connection.close()
 '''
 
 
@@ -521,16 +536,109 @@ def _limit_resources(memory_mb: float, processes: int) -> list[str]:
     return done
 
 
+class _KernelAnswers:
+    """The runner's line to the student's kernel once the notebook has run: a loop in the
+    kernel (``_KERNEL_TOOLS``) reads requests from a loopback socket and writes the answers
+    back as JSON lines, so that a call costs a fraction of a millisecond, not a cell's
+    execution (a hidden test may call a student's step function a thousand times).
+
+    A call that outlasts ``seconds`` is interrupted; a kernel that does not come back within
+    the grace time, closes its end or sends what is not a JSON object is taken as gone.
+    """
+
+    def __init__(self, client, seconds: float):
+        import inspect
+        import secrets
+        import socket
+
+        self.client, self.seconds, self.alive = client, seconds, False
+        self.connection, self.buffer = None, b""
+        listener = socket.create_server(("127.0.0.1", 0))
+        token = secrets.token_hex(16)
+        sources = [inspect.getsource(function)
+                   for function in (encode_answer, decode_answer, parse_srepr)]
+        client.kc.execute(_KERNEL_TOOLS.format(sources=sources)
+                          + f"\n_grader_serve({listener.getsockname()[1]}, {token!r})\n",
+                          store_history=False, allow_stdin=False, stop_on_error=False)
+        deadline = time.monotonic() + INTERRUPT_GRACE_SECONDS + 30
+        try:
+            while not self.alive and time.monotonic() < deadline:
+                listener.settimeout(max(deadline - time.monotonic(), 0.01))
+                self.connection, self.buffer = listener.accept()[0], b""
+                # Anything else in the sandbox that connects first is turned away.
+                self.alive = self._line(INTERRUPT_GRACE_SECONDS, 100) == token.encode()
+                if not self.alive:
+                    self.connection.close()
+        except OSError:
+            self.alive = False
+        finally:
+            listener.close()
+
+    def _line(self, seconds: float, limit: int = REPLY_BYTES) -> bytes:
+        """The next line from the kernel, without its end; OSError (TimeoutError included)
+        when none comes within ``seconds``, ConnectionError when it is longer than ``limit``
+        or the kernel closed its end."""
+        deadline = time.monotonic() + seconds
+        while b"\n" not in self.buffer:
+            if len(self.buffer) > limit:
+                raise ConnectionError("a reply longer than the grader accepts")
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError
+            self.connection.settimeout(left)
+            chunk = self.connection.recv(1 << 20)
+            if not chunk:
+                raise ConnectionError("the kernel closed its end")
+            self.buffer += chunk
+        line, self.buffer = self.buffer.split(b"\n", 1)
+        if len(line) > limit:
+            raise ConnectionError("a reply longer than the grader accepts")
+        return line
+
+    def _reply(self, seconds: float) -> dict:
+        reply = json.loads(self._line(seconds))
+        if not isinstance(reply, dict):
+            raise ValueError("a reply that is not a JSON object")
+        return reply
+
+    def ask(self, request: dict) -> dict:
+        if not self.alive:
+            return {"dead": True}
+        try:
+            self.connection.sendall(json.dumps(request).encode() + b"\n")
+            try:
+                return self._reply(self.seconds)
+            except TimeoutError:
+                pass
+            from nbclient.util import run_sync
+
+            with contextlib.suppress(Exception):
+                run_sync(self.client.km.interrupt_kernel)()
+            # The loop answers an interrupted call with {"interrupted": true}; an answer that
+            # came just as the time ran out counts as late all the same.
+            self._reply(INTERRUPT_GRACE_SECONDS)
+            return {"timeout": True}
+        except (OSError, ValueError, RecursionError):
+            self.alive = False
+            return {"dead": True}
+
+    def close(self) -> None:
+        if self.connection is not None:
+            with contextlib.suppress(OSError):
+                if self.alive:
+                    self.connection.sendall(b'{"op": "end"}\n')
+                self.connection.close()
+
+
 def _run_submission(config: dict) -> int:
     """The runner: execute the notebook, then answer the checker's requests (JSON lines on
     standard input and output) until told to end."""
     protocol = os.fdopen(os.dup(1), "w", encoding="utf-8")
     os.dup2(2, 1)  # nothing else may write to the checker's channel
     limits = _limit_resources(config["memory_mb"], config["processes"])
-    import inspect
 
     from nbclient import NotebookClient
-    from nbclient.exceptions import CellTimeoutError, DeadKernelError
+    from nbclient.exceptions import DeadKernelError
     from nbclient.util import run_sync  # the kernel manager's methods are coroutines
 
     work = Path(config["work"])
@@ -539,7 +647,17 @@ def _run_submission(config: dict) -> int:
 
     class Client(NotebookClient):
         """nbclient, with each cell's kept output bounded (a kernel sends a stream in pieces
-        of any size: each piece is cut to what is left of the cell's allowance)."""
+        of any size: each piece is cut to what is left of the cell's allowance), and a cell
+        that outlasts its time interrupted by nbclient itself, which then waits a few seconds
+        for the cell's last output and marks ``timed_out``. (With ``interrupt_on_timeout``
+        off, nbclient 0.11 leaves the timed-out cell's output reader running, and it swallows
+        the outputs of the cells after it.)"""
+
+        timed_out = False
+
+        async def _async_handle_timeout(self, timeout, cell=None):
+            self.timed_out = True
+            return await super()._async_handle_timeout(timeout, cell)
 
         def output(self, outs, msg, display_id, cell_index):
             left = OUTPUT_CHARS - sum(len(json.dumps(out)) for out in outs)
@@ -562,7 +680,9 @@ def _run_submission(config: dict) -> int:
 
     def new_client():
         client = Client(notebook, timeout=cell_seconds, allow_errors=True,
-                        interrupt_on_timeout=False, startup_timeout=300, kernel_name="python3",
+                        interrupt_on_timeout=True, startup_timeout=300, kernel_name="python3",
+                        error_on_timeout={"ename": "TimeoutError", "evalue": "", "traceback": []},
+                        iopub_timeout=INTERRUPT_GRACE_SECONDS,
                         resources={"metadata": {"path": str(work)}})
         client.km = client.create_kernel_manager()
         client.start_new_kernel(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -580,15 +700,19 @@ def _run_submission(config: dict) -> int:
             notebook.cells.pop()
         return cell
 
+    def ran_past_its_time(client, cell, index) -> bool:
+        client.timed_out = False
+        client.execute_cell(cell, index)
+        return client.timed_out
+
     def responsive(client) -> bool:
-        """Interrupt the kernel, and see whether it comes back within the grace time."""
-        with contextlib.suppress(Exception):
-            run_sync(client.km.interrupt_kernel)()
-        client.timeout = INTERRUPT_GRACE_SECONDS
+        """Whether the kernel, interrupted at the end of a cell's time, runs a new cell within
+        the grace time."""
+        client.timeout, client.timed_out = INTERRUPT_GRACE_SECONDS, False
         try:
             run_extra(client, "pass")
-            return True
-        except (CellTimeoutError, DeadKernelError, RuntimeError):
+            return not client.timed_out
+        except (DeadKernelError, RuntimeError):
             return False
         finally:
             client.timeout = cell_seconds
@@ -608,14 +732,14 @@ def _run_submission(config: dict) -> int:
                            "interrupt, or ended the kernel")]
                 continue
             try:
-                client.execute_cell(cell, index)
-            except CellTimeoutError:
-                cell.outputs.append(nbformat.v4.new_output(
-                    "error", ename="TimeoutError", traceback=[],
-                    evalue=f"stopped by the grader: this cell ran longer than {cell_seconds:g} s"))
-                if not responsive(client):
-                    stuck = index
-                    break
+                if ran_past_its_time(client, cell, index):
+                    cell.outputs.append(nbformat.v4.new_output(
+                        "error", ename="TimeoutError", traceback=[],
+                        evalue=f"stopped by the grader: this cell ran longer than "
+                               f"{cell_seconds:g} s"))
+                    if not responsive(client):
+                        stuck = index
+                        break
             except DeadKernelError:
                 stuck, died = index, True
                 break
@@ -633,43 +757,16 @@ def _run_submission(config: dict) -> int:
                 cell.outputs = []
     alive = stuck is None
     nbformat.write(notebook, work / "executed.ipynb")
-    if alive:
-        sources = [inspect.getsource(function)
-                   for function in (encode_answer, decode_answer, parse_srepr)]
-        try:
-            run_extra(client, _KERNEL_TOOLS.format(sources=sources))
-        except (CellTimeoutError, DeadKernelError):
-            alive = False
-    send({"event": "ran", "alive": alive, "limits": limits, "notes": notes})
-    reply_path = work / ".grader-reply.json"
+    kernel = _KernelAnswers(client, cell_seconds) if alive else None
+    send({"event": "ran", "alive": kernel is not None and kernel.alive, "limits": limits,
+          "notes": notes})
     for line in sys.stdin:
         request = json.loads(line)
         if request.get("op") == "end":
             break
-        if not alive:
-            send({"dead": True})
-            continue
-        with contextlib.suppress(FileNotFoundError):
-            reply_path.unlink()
-        code = (f"_grader_serve(__import__('json').loads({line!r}), {str(reply_path)!r}, "
-                "globals())")
-        try:
-            cell = run_extra(client, code)
-        except CellTimeoutError:
-            alive = responsive(client)
-            send({"timeout": True})
-            continue
-        except DeadKernelError:
-            alive = False
-            send({"dead": True})
-            continue
-        errors = [out for out in cell.outputs if out.get("output_type") == "error"]
-        if not reply_path.exists() or reply_path.stat().st_size > REPLY_BYTES:
-            reason = (f"{errors[0].get('ename')}: {errors[0].get('evalue')}" if errors
-                      else "no reply")
-            send({"error": ["GraderError", reason[:1000]]})
-            continue
-        send(json.loads(reply_path.read_text(encoding="utf-8")))
+        send(kernel.ask(request) if kernel is not None else {"dead": True})
+    if kernel is not None:
+        kernel.close()
     with contextlib.suppress(Exception):
         run_sync(client.km.shutdown_kernel)(now=True)
     return 0
@@ -736,12 +833,20 @@ class _StudentFunction:
 
     def __init__(self, channel: _Channel, name: str, seconds: float):
         self._channel, self._name, self._seconds = channel, name, seconds
+        self._timed_out = False
 
     def __call__(self, *args, **kwargs):
         if kwargs:
             raise TypeError("the grader passes a student's function positional arguments only")
+        if self._timed_out:
+            # A function that outlasted its time once is not called again: a test that calls it
+            # hundreds of times would otherwise wait out each call and use up the grading's
+            # total time, and every later question with it.
+            raise TimeoutError(f"not called again: an earlier call of {self._name} ran longer "
+                               f"than {self._seconds:g} s and was stopped by the grader")
         reply = self._channel.ask({"op": "call", "name": self._name,
                                    "args": [encode_answer(arg) for arg in args]})
+        self._timed_out = "timeout" in reply
         return _reply_value(reply, self._name, self._seconds)
 
     def __repr__(self) -> str:

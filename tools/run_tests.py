@@ -1,25 +1,28 @@
-"""Run the whole test suite (``make test``) as two pytest processes, one per core.
+"""Run the whole test suite (``make test``) as a queue of pytest jobs, two at a time.
 
-The suite's time goes mostly to running notebooks: nbval runs them, the browser tests run them in
-JupyterLab, the website build and the Binder environment run them again. Each of these is one
-process waiting on a kernel, so on a machine with two cores one pytest leaves a core idle. This
-script splits the suite into two shards of about the same length, runs them side by side, prints
-each shard's output when it ends and fails if either fails:
+The suite's time goes mostly to running notebooks and building environments: the browser tests
+run every notebook in JupyterLab, the website build runs them again, the Binder environment runs
+them under nbval, the install tests build a student's environment, the floors run the unit suite
+under the oldest supported versions. Each job is one process mostly waiting on a kernel or an
+installer, so on a machine with two cores the jobs run two at a time, longest first, and each
+core that a job leaves takes the next job of the queue. Each job's output is printed when it
+ends; the run fails if any job fails.
 
-* ``browser``: the browser tests, the website, the Binder environment and the installs from a
-  fresh clone, the sdist and the wheel (tests that start their own servers and environments,
-  kept together so they never compete for a port or a folder);
-* ``core``: everything else: doctests, unit, property and symbolic tests, and the graded
-  assignments. The notebooks run under nbval in the Binder test, in Binder's environment.
+* ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
+  ``tests/site``);
+* ``core``: everything else in the main environment: doctests, unit, property and symbolic
+  tests, and the graded assignments;
+* ``environments``: the tests that build environments of their own and start servers in them
+  (``tests/binder``: Binder's environment, where the notebooks' nbval run happens;
+  ``tests/install``: a student's, from a fresh clone, the sdist and the wheel);
+* ``floors`` (with ``--floors PYTHON``): the unit suite (what ``make check`` runs) under the
+  interpreter of the environment with the oldest supported versions pinned (``make
+  test-floors``), with its own kernel caches (compiled code differs between library versions).
 
-``--floors PYTHON`` adds a third job: the unit suite (what ``make check`` runs) under another
-interpreter, the one of the environment with the oldest supported versions pinned
-(``make test-floors``). It starts when the first shard ends, on the core that shard leaves, with
-its own kernel caches (compiled code differs between library versions).
-
-With one core (or ``--serial``) it runs a single pytest over everything, then the floors;
-``--floors-only`` runs the floors job alone, under the interpreter running this script. Any
-other arguments go to pytest unchanged (``python tools/run_tests.py -x -k order``).
+Servers pick free ports and environments live in folders of their own, so jobs never compete
+for a port or a folder. With one core (or ``--serial``) it runs a single pytest over everything,
+then the floors; ``--floors-only`` runs the floors job alone, under the interpreter running this
+script. Any other arguments go to pytest unchanged (``python tools/run_tests.py -x -k order``).
 """
 
 from __future__ import annotations
@@ -32,13 +35,18 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-BROWSER_SHARD = ["tests/browser", "tests/site", "tests/binder", "tests/install"]
-# The notebooks' nbval run is the Binder test's (tests/binder): it runs them in the environment
-# Binder builds, so they are not run a fourth time here.
-CORE_SHARD = ["src", "tests"] + [f"--ignore={path}" for path in BROWSER_SHARD]
-#: What ``make check`` runs: the unit suite, without notebooks, browser, website or Binder.
-UNIT_SUITE = ["src", "tests"] + [f"--ignore={path}" for path in [*BROWSER_SHARD,
-                                                                  "tests/assignments"]]
+#: The jobs in the main environment, by the folders they test (``core`` takes what is left).
+FOLDERS = {"browser": ["tests/browser", "tests/site"],
+           "environments": ["tests/binder", "tests/install"]}
+ELSEWHERE = [folder for folders in FOLDERS.values() for folder in folders]
+CORE = ["src", "tests"] + [f"--ignore={path}" for path in ELSEWHERE]
+#: What ``make check`` runs: the unit suite, without notebooks, browser, website, Binder,
+#: installs or the graded assignments.
+UNIT_SUITE = ["src", "tests"] + [f"--ignore={path}"
+                                 for path in [*ELSEWHERE, "tests/assignments"]]
+#: The order jobs start in: the longest first (measured on a clean clone, see docs/testing.md),
+#: so that the last to start are the shortest.
+ORDER = ["browser", "core", "floors", "environments"]
 
 
 def floors_job(python: str, extra: list[str]) -> tuple[list[str], dict]:
@@ -61,12 +69,17 @@ def run_serial(extra: list[str], floors: str | None) -> int:
     return code
 
 
-def run_sharded(extra: list[str], floors: str | None) -> int:
-    jobs = {"core": ([sys.executable, "-m", "pytest", "-o", "cache_dir=.pytest_cache/core",
-                      *CORE_SHARD, *extra], None),
-            "browser": ([sys.executable, "-m", "pytest", "-o", "cache_dir=.pytest_cache/browser",
-                         *BROWSER_SHARD, *extra], None)}
-    waiting = {"floors": floors_job(floors, extra)} if floors is not None else {}
+def pytest_job(name: str, paths: list[str], extra: list[str]) -> tuple[list[str], None]:
+    return ([sys.executable, "-m", "pytest", "-o", f"cache_dir=.pytest_cache/{name}", *paths,
+             *extra], None)
+
+
+def run_queue(extra: list[str], floors: str | None, workers: int = 2) -> int:
+    jobs = {"core": pytest_job("core", CORE, extra)}
+    jobs.update({name: pytest_job(name, folders, extra) for name, folders in FOLDERS.items()})
+    if floors is not None:
+        jobs["floors"] = floors_job(floors, extra)
+    waiting = [(name, *jobs[name]) for name in ORDER if name in jobs]
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as logs:
         running, codes, minutes = {}, {}, {}
@@ -78,9 +91,9 @@ def run_sharded(extra: list[str], floors: str | None) -> int:
                              time.perf_counter())
             print(f"{name}: {' '.join(command[1:])}", flush=True)
 
-        for name, (command, env) in jobs.items():
-            start(name, command, env)
-        while running:
+        while waiting or running:
+            while waiting and len(running) < workers:
+                start(*waiting.pop(0))
             time.sleep(1.0)
             for name, (process, log, since) in list(running.items()):
                 if process.poll() is None:
@@ -93,14 +106,11 @@ def run_sharded(extra: list[str], floors: str | None) -> int:
                 sys.stdout.write(log.read())
                 log.close()
                 del running[name]
-                if waiting:  # the core this job leaves goes to the floors
-                    waiting_name, (command, env) = waiting.popitem()
-                    start(waiting_name, command, env)
     total = (time.perf_counter() - started) / 60
     summary = ", ".join(f"{name} exit {code} ({minutes[name]:.1f} min)"
                         for name, code in codes.items())
     print(f"\nwhole suite: {total:.1f} min wall ({summary})", flush=True)
-    # pytest's exit code 5 (no tests collected) is a failure here too: a shard must test something.
+    # pytest's exit code 5 (no tests collected) is a failure here too: a job must test something.
     return max(codes.values())
 
 
@@ -117,7 +127,7 @@ def main(argv: list[str]) -> int:
         del extra[at : at + 2]
     if serial or (os.cpu_count() or 1) < 2:
         return run_serial(extra, floors)
-    return run_sharded(extra, floors)
+    return run_queue(extra, floors)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ and install the package itself with ``-e .``.
 The fast tests read the files. The ``slow`` tests prove the configuration without Docker:
 ``jupyter-repo2docker --no-build .`` must accept it and pick the Python build pack with our
 runtime, and a fresh virtual environment built only from ``binder/requirements.txt`` must
-run every notebook under nbval (the course's nbval run: the core shard of ``make test`` leaves
+run every notebook under nbval (the course's nbval run: the core job of ``make test`` leaves
 the notebooks to it). As with the browser tests, a missing tool skips those tests with the
 reason, except under ``CI=true``, where it fails them.
 """
@@ -374,7 +374,7 @@ def test_fresh_venv_from_binder_requirements_runs_every_notebook(tmp_path):
         (tmp_path / var.lower()).mkdir()
         env[var] = str(tmp_path / var.lower())
 
-    # The course's nbval run happens here, in Binder's environment (the core shard of
+    # The course's nbval run happens here, in Binder's environment (the core job of
     # `make test` leaves the notebooks to this test): every cell runs, the cells marked
     # NBVAL_CHECK_OUTPUT print what they stored (notebooks/conftest.py, copied along, sets the
     # rules). The newest versions the ranges allow run every notebook too, in JupyterLab

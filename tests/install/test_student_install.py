@@ -20,7 +20,7 @@ that environment's packages, pendulum_lab's own left out; pendulum_lab itself is
 the wheel or the sdist (``--no-deps``). What is checked is what the artifacts bring; that their
 dependencies resolve is what the student command (and every ``make`` environment) checks.
 
-These tests start servers and environments of their own: they run in the browser shard of
+These tests start servers and environments of their own: they run in the environments job of
 ``make test`` (tools/run_tests.py). A missing tool (git, the ``build`` package) skips them with
 the reason, except under ``CI=true``, where it fails them.
 """
