@@ -16,6 +16,7 @@ reason, except under ``CI=true``, where it fails them.
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import os
 import re
@@ -269,8 +270,14 @@ def test_repo2docker_accepts_the_binder_configuration(monkeypatch):
 
 
 def _python_for(version: str) -> tuple[str, str]:
-    """An interpreter for ``version`` (from PATH) or, failing that, this one; with its X.Y."""
-    candidate = shutil.which(f"python{version}") or sys.executable
+    """An interpreter for ``version`` (on PATH or pyenv's, as the Makefile finds its own) or,
+    failing that, this one; with its X.Y."""
+    spec = importlib.util.spec_from_file_location("find_python",
+                                                  REPO_ROOT / "tools" / "find_python.py")
+    find_python = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(find_python)
+    major, minor = (int(part) for part in version.split("."))
+    candidate = find_python.find((major, minor)) or sys.executable
     probe = subprocess.run(
         [candidate, "-c", "import sys; print('%d.%d' % sys.version_info[:2])"],
         capture_output=True,
