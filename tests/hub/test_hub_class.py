@@ -143,9 +143,8 @@ def hub(ready, image, tmp_path_factory):
     try:
         hub.start()
         yield hub
-    finally:
-        survivors = hub.stop()
-        assert not survivors or hub.stopped, survivors
+    finally:  # the last test checks what stopping leaves; here only what an error left
+        hub.stop()
 
 
 @pytest.fixture(scope="module")
