@@ -25,7 +25,7 @@ def warmup_lines(text: str) -> list[str]:
             re.finditer(r"(pendulum-lab warmup [^\n\\&]*)", text)]
 
 
-def test_the_hub_pages_warmups_parse_and_name_the_cache_the_variable_points_at():
+def test_the_hub_pages_warmups_parse_and_name_the_cache_the_variable_points_at(capsys):
     text = HUB_PAGE.read_text(encoding="utf-8")
     lines = warmup_lines(text)
     assert len(lines) >= 2  # the image's and TLJH's
@@ -39,6 +39,7 @@ def test_the_hub_pages_warmups_parse_and_name_the_cache_the_variable_points_at()
     # Negative control: a line with an option the command does not have fails to parse.
     with pytest.raises(SystemExit):
         parse_arguments(build_parser(), ["warmup", "--cache", "/opt/x", "--links", "1"])
+    assert "unrecognized arguments: --links" in capsys.readouterr().err
 
 
 @pytest.mark.skipif(shutil.which("bash") is None, reason="binder/start is a bash script")
