@@ -32,6 +32,11 @@ FLOORS_BIN := $(FLOORS_VENV)/bin
 MATHJAX_VERSION := 3.2.2
 MATHJAX := docs/_vendor/mathjax/tex-mml-chtml.js
 
+# The proxy of the JupyterHub that tests/hub starts (from the npm registry, as MathJax is),
+# installed into a git-ignored folder of the project.
+HUB_PROXY_VERSION := 5.3.0
+HUB_PROXY := test-artifacts/hub-proxy/node_modules/.bin/configurable-http-proxy
+
 .PHONY: lab test test-floors check lint bench docs mathjax assignments clean
 
 $(BIN)/python:
@@ -64,6 +69,11 @@ $(MATHJAX):
 
 mathjax: $(MATHJAX)
 
+$(HUB_PROXY):
+	npm install --silent --no-audit --no-fund --prefix test-artifacts/hub-proxy \
+		configurable-http-proxy@$(HUB_PROXY_VERSION)
+	test -x $@
+
 docs: $(VENV)/.installed-docs $(MATHJAX)
 	$(BIN)/python tools/build_site.py
 
@@ -76,7 +86,7 @@ lab: $(VENV)/.installed-lab
 
 # A queue of pytest jobs, two at a time, longest first (tools/run_tests.py; --serial for one):
 # the browser and the website, the core, the floors, the environments (Binder, the installs).
-test: $(VENV)/.installed-test $(FLOORS_BIN)/.installed $(MATHJAX)
+test: $(VENV)/.installed-test $(FLOORS_BIN)/.installed $(MATHJAX) $(HUB_PROXY)
 	$(BIN)/ruff check .
 	$(BIN)/python tools/run_tests.py --floors $(FLOORS_BIN)/python
 
@@ -90,7 +100,7 @@ test-floors: $(FLOORS_BIN)/.installed
 check: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest src tests --ignore=tests/browser --ignore=tests/site --ignore=tests/binder \
-		--ignore=tests/install --ignore=tests/assignments
+		--ignore=tests/install --ignore=tests/assignments --ignore=tests/hub
 
 bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/run.py

@@ -14,7 +14,8 @@ ends; the run fails if any job fails.
   tests, and the graded assignments;
 * ``environments``: the tests that build environments of their own and start servers in them
   (``tests/binder``: Binder's environment, where the notebooks' nbval run happens;
-  ``tests/install``: a student's, from a fresh clone, the sdist and the wheel);
+  ``tests/install``: a student's, from a fresh clone, the sdist and the wheel; ``tests/hub``: a
+  class on a JupyterHub);
 * ``floors`` (with ``--floors PYTHON``): the unit suite (what ``make check`` runs) under the
   interpreter of the environment with the oldest supported versions pinned (``make
   test-floors``), with its own kernel caches (compiled code differs between library versions).
@@ -37,7 +38,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 #: The jobs in the main environment, by the folders they test (``core`` takes what is left).
 FOLDERS = {"browser": ["tests/browser", "tests/site"],
-           "environments": ["tests/binder", "tests/install"]}
+           "environments": ["tests/binder", "tests/install", "tests/hub"]}
 ELSEWHERE = [folder for folders in FOLDERS.values() for folder in folders]
 CORE = ["src", "tests"] + [f"--ignore={path}" for path in ELSEWHERE]
 #: What ``make check`` runs: the unit suite, without notebooks, browser, website, Binder,

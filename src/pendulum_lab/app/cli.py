@@ -4,6 +4,8 @@ Usage::
 
     pendulum-lab                         same as `pendulum-lab lab`
     pendulum-lab lab [--dir DIR] [--force] [--no-browser] [--port N] [-- JUPYTER_OPTIONS]
+    pendulum-lab warmup [--cache DIR] [--n N ...]
+    pendulum-lab handout-link --hub URL --repo URL [--branch B] [--path FILE] [--check]
     pendulum-lab report ...              when pendulum_lab/report.py provides it
 
 ``lab`` opens JupyterLab on the course notebooks:
@@ -350,6 +352,50 @@ def _add_warmup_command(subparsers) -> None:
     warm.set_defaults(handler=run_warmup)
 
 
+def run_handout_link(args) -> int:
+    """Print the nbgitpuller link that hands the course out on a JupyterHub."""
+    from .handout import check_handout, handout_link
+
+    try:
+        link = handout_link(args.hub, args.repo, branch=args.branch, path=args.path)
+    except (TypeError, ValueError) as err:
+        print(f"pendulum-lab handout-link: {err}", file=sys.stderr)
+        return 2
+    if args.check:
+        problems = check_handout(args.hub, args.repo, branch=args.branch)
+        for problem in problems:
+            print(f"pendulum-lab handout-link: {problem}", file=sys.stderr)
+        if problems:
+            return 1
+    print(link)
+    return 0
+
+
+def _add_handout_command(subparsers) -> None:
+    from .handout import DEFAULT_PATH
+
+    handout = subparsers.add_parser(
+        "handout-link",
+        help="print the link that hands the course out on a JupyterHub (nbgitpuller)",
+        description="Print the nbgitpuller link that hands the course out on a JupyterHub: "
+        "a student who opens it gets the course's repository in their home folder (updated, "
+        "keeping their edits, when they open it again) and the notebook it names. The hub's "
+        "image needs nbgitpuller (docs/instructors.md).",
+    )
+    handout.add_argument("--hub", required=True, metavar="URL",
+                         help="the hub's address, such as https://hub.example.edu")
+    handout.add_argument("--repo", required=True, metavar="URL",
+                         help="the course's git repository, as the hub's servers clone it")
+    handout.add_argument("--branch", default=None, metavar="B",
+                         help="the branch to hand out (default: the repository's default)")
+    handout.add_argument("--path", default=DEFAULT_PATH, metavar="FILE",
+                         help=f"the notebook the link opens (default: {DEFAULT_PATH})")
+    handout.add_argument("--check", action="store_true",
+                         help="first check that the hub answers and that the repository "
+                         "(and branch) can be read with git from this machine")
+    handout.set_defaults(handler=run_handout_link)
+
+
 def _add_optional_commands(subparsers) -> None:
     """Subcommands of other modules of the application layer (``pendulum_lab.app.report``)."""
     from . import report  # matplotlib: loaded only when the parser is built
@@ -370,6 +416,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_lab_command(subparsers)
     _add_warmup_command(subparsers)
+    _add_handout_command(subparsers)
     _add_optional_commands(subparsers)
     parser.set_defaults(commands=tuple(subparsers.choices))
     return parser
