@@ -26,6 +26,7 @@ import uuid
 
 import numba
 import pytest
+from numba.core import caching as numba_caching
 
 try:
     import fcntl  # the emulated msvcrt locks with it
@@ -242,6 +243,33 @@ def test_an_unwritable_cache_folder_compiles_in_memory_and_says_where(layers, mo
         module, path = load_generated("layer_test", new_source())
     assert path is not None
     forget(module)
+
+
+def test_a_full_disk_compiles_in_memory_and_says_for_this_session_only(layers, monkeypatch):
+    """A student's home that fills up while kernels are saved (emulated: the index's save
+    raises ENOSPC, as a full disk does): the kernel runs, a warning names the folder, and the
+    note no longer promises that it loads from disk next time."""
+    def full_disk(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    def compile_once():
+        events = []
+        with compile_status.listen(events.append):
+            module, _ = load_generated("layer_test", new_source(), what="a tiny kernel")
+        assert module.triple(2.0) == 6.0
+        forget(module)
+        return events[-1]
+
+    monkeypatch.setattr(numba_caching.IndexDataCacheFile, "save", full_disk)
+    with pytest.warns(KernelCacheWarning, match="No space left on device"):
+        full = compile_once()
+    assert not full.kept and full.message.endswith("for this session only")
+    monkeypatch.undo()  # negative control: the same compilation with room on the disk
+    monkeypatch.setenv(CACHE_VARIABLE, str(layers / "user"))
+    monkeypatch.setenv(compile_status.NOTES_VARIABLE, "off")
+    with warnings_as_errors():
+        room = compile_once()
+    assert room.kept and "from now on it loads from the disk cache" in room.message
 
 
 def test_no_home_folder_compiles_in_memory(layers, monkeypatch):

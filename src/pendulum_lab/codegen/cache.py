@@ -597,6 +597,7 @@ class KernelCache(numba_caching.Cache):
                         return
                 numba_caching.IndexDataCacheFile(str(folder), base, stamp).save(key, payload)
         except OSError as err:  # full, or no longer writable: the kernel stays in memory
+            compile_status.count_unsaved()
             _warn_once(f"cannot save a compiled kernel into {folder} "
                        f"({err.strerror or err}); it is compiled in memory for this session. "
                        f"Set {CACHE_VARIABLE} to a writable folder to keep it.")
@@ -782,6 +783,7 @@ def _write_or_none(path: Path, source: str) -> Path | None:
     try:
         _write_atomically(path, source)
     except OSError as err:
+        compile_status.count_unsaved()
         _warn_once(f"cannot write {path} ({err.strerror or err}); kernels are "
                    f"compiled in memory for this session. Set {CACHE_VARIABLE} to a writable "
                    "folder to keep them.")

@@ -134,6 +134,7 @@ class _ThreadState(threading.local):
         self.compiled_seconds = 0.0  # of outermost compilations that compiled something
         self.loads = 0
         self.compilations = 0
+        self.unsaved = 0
         self.listeners: list[Callable[[Compilation], None]] = []
 
 
@@ -163,6 +164,12 @@ def count_load() -> None:
 def count_compilation() -> None:
     """Called by the kernel cache when Numba is about to compile a kernel (not in a cache)."""
     _STATE.compilations += 1
+
+
+def count_unsaved() -> None:
+    """Called by the kernel cache when what it compiled could not be saved (a full disk, a
+    folder no longer writable): the compilation is then for this session only."""
+    _STATE.unsaved += 1
 
 
 @contextmanager
@@ -221,7 +228,7 @@ def compiling(what: str, *, loading: bool | None = None, kept: bool = True):
     note = None if listeners or _notes_off() else _Note(started)
     _tell(listeners, started)
     state.depth = 1
-    counts = state.loads, state.compilations
+    counts = state.loads, state.compilations, state.unsaved
     start = time.perf_counter()
     ok = False
     try:
@@ -235,6 +242,7 @@ def compiling(what: str, *, loading: bool | None = None, kept: bool = True):
         outcome = False if compiled else (True if loaded else loading)
         if not outcome:
             state.compiled_seconds += seconds
+        kept = kept and state.unsaved == counts[2]
         ended = Compilation(what, outcome, "finished" if ok else "failed", seconds, kept)
         if note is not None:
             note.close(ended)
