@@ -122,3 +122,24 @@ def test_a_point_in_space_cannot_be_placed_by_a_drag(spherical):
     # negative control: a planar system's point is placed
     assert pl.elastic_pendulum().place_point(0, 0.0, -1.0, [1.0, 0.3]) == pytest.approx(
         [1.0, 0.0], abs=1e-6)
+
+
+def test_the_foucault_pendulums_equilibrium_and_its_two_frequencies():
+    """Found numerically (Newton) within a second: pushed north by the centrifugal force,
+    Omega^2 l sin(lat) cos(lat) / g, and the swing's two frequencies split by 2 Omega sin(lat)
+    (the plane turns at half the difference)."""
+    spin, latitude = 0.01, 45.0
+    turning = pl.foucault_pendulum(latitude=latitude, rotation_rate=spin)
+    (bottom,) = turning.equilibria
+    lat = np.radians(latitude)
+    assert bottom.angles[0] == pytest.approx(0.0, abs=1e-12)
+    assert bottom.angles[1] == pytest.approx(spin ** 2 * L * np.sin(lat) * np.cos(lat) / G,
+                                             rel=1e-3)
+    frequencies = np.sort(np.abs(np.linalg.eigvals(np.array(bottom.jacobian, dtype=float))
+                                 .imag))[::2]
+    assert frequencies[1] - frequencies[0] == pytest.approx(2 * spin * np.sin(lat), rel=1e-3)
+    # negative control: a frame that does not turn leaves the bob at the bottom, one frequency
+    (still,) = pl.foucault_pendulum(latitude=latitude, rotation_rate=0.0).equilibria
+    assert still.angles == (0.0, 0.0)
+    still_frequencies = np.abs(np.linalg.eigvals(np.array(still.jacobian, dtype=float)).imag)
+    assert np.ptp(still_frequencies) < 1e-9

@@ -104,6 +104,9 @@ _LARGEST_EXPONENT = 100
 #: values (positive ones only for a coordinate declared positive).
 _SEARCH_VALUES = (-30.0, -10.0, -3.0, -1.0, -0.3, 0.3, 1.0, 3.0, 10.0, 30.0)
 _SEARCH_POINTS = 4000
+#: Random places in [-1, 1] per coordinate that Newton's method also starts from, for the
+#: equilibria of points in a turning frame (besides the origin).
+_NEWTON_STARTS = 8
 
 
 def _symbol_list(name: str, values) -> list:
@@ -963,7 +966,16 @@ class MechanicalSystem:
         """The equilibria SymPy's ``solve`` finds, each with its Jacobian.
 
         ``subs`` gives values to some parameters first (solving is then easier).
+
+        Points written in a turning frame (:attr:`frame_rotation`): SymPy's ``solve`` did not
+        finish in five minutes on the Foucault pendulum's equations (a square root, and
+        centrifugal terms some 1e-10 of gravity), so their equilibria are found numerically
+        instead, by Newton's method from the origin and from :data:`_NEWTON_STARTS` other
+        places, at the values ``subs`` gives every parameter; each is then checked and
+        linearised as :meth:`equilibrium_at` does.
         """
+        if self.frame_rotation is not None:
+            return self._equilibria_by_newton(subs)
         equations = self.equilibrium_equations()
         if subs:
             equations = equations.xreplace(dict(subs))
@@ -977,6 +989,52 @@ class MechanicalSystem:
             if sp.simplify(self.mass_matrix.xreplace(at).det()) == 0:
                 continue  # where the coordinates fail (r = 0 of polar coordinates)
             found.append(self.equilibrium_at(point, subs))
+        return found
+
+    def _equilibria_by_newton(self, subs) -> list[SystemEquilibrium]:
+        """The equilibria Newton's method finds from the origin and from random places
+        (see :meth:`equilibria`), every parameter given a value in ``subs``."""
+        import numpy as np
+
+        values = {s: v for s, v in dict(subs or {}).items() if s in self.parameters}
+        missing = [str(s) for s in self.parameters if s not in values]
+        if missing:
+            raise ValueError(f"the equilibria of {self.name} (points in a turning frame) are "
+                             f"found numerically: give every parameter a value in `subs`; "
+                             f"missing {missing}")
+        rest = {w: 0 for w in self.omega}
+        forcing = self.forcing.xreplace(rest).xreplace(values)
+        residual = sp.lambdify(list(self.q), list(forcing), modules="numpy", cse=True)
+        slope = sp.lambdify(list(self.q), forcing.jacobian(self.q), modules="numpy", cse=True)
+        rng = np.random.default_rng(20261207)
+        starts = np.vstack([np.zeros(self.n), rng.uniform(-1, 1, (_NEWTON_STARTS, self.n))])
+        points = []
+        for q in starts:
+            with np.errstate(all="ignore"):
+                for _ in range(50):
+                    try:
+                        step = np.linalg.solve(np.array(slope(*q), dtype=float),
+                                               -np.array(residual(*q), dtype=float))
+                    except (np.linalg.LinAlgError, TypeError, ValueError):
+                        break
+                    q = q + step
+                    if not np.all(np.isfinite(q)) or np.max(np.abs(step)) < 1e-15 * (
+                            1 + np.max(np.abs(q))):
+                        break
+                value = np.array(residual(*q), dtype=complex)
+            if not (np.all(np.isfinite(value)) and np.max(np.abs(value)) < 1e-10
+                    and np.all(value.imag == 0)):
+                continue
+            if any(np.allclose(q, other, atol=1e-9) for other in points):
+                continue
+            points.append(q)
+        found = []
+        for q in points:
+            at = dict(zip(self.q, q)) | values
+            matrix = np.array(self.mass_matrix.xreplace(at).evalf(), dtype=complex)
+            if not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-12:
+                continue  # where the coordinates fail
+            found.append(self.equilibrium_at(tuple(float(c) for c in q), values))
         return found
 
     def equilibrium_at(self, point, subs: dict | None = None) -> SystemEquilibrium:
