@@ -29,7 +29,7 @@ def apsis_rate(run) -> float:
 
 def test_symplectic_methods_keep_the_vertical_angular_momentum_and_rk4_does_not(spherical):
     """L_z is a bilinear invariant q^T C p: symplectic (partitioned) Runge-Kutta methods keep
-    it to round-off (Hairer, Lubich, Wanner, Thm IV.2.4); RK4 lets it drift."""
+    it to round-off (Hairer, Lubich, Wanner, Sect. IV.2); RK4 lets it drift."""
     start = ([0.4, 0.0], [0.0, 1.5])
     drifts = {}
     for method in ("leapfrog", "glrk4", "rk4"):
