@@ -29,7 +29,9 @@ neither coordinates, velocities, ``t`` nor declared parameters (named), names th
 momentum ``p_x``: SymPy would merge them), parameter values that are not real finite
 numbers (or break a parameter's declared assumption, such as ``positive``), masses that are
 not real, finite and non-negative, functions the equations cannot be generated from (named,
-with those accepted: :data:`ACCEPTED_FUNCTIONS`), and descriptions of more than
+with those accepted: :data:`ACCEPTED_FUNCTIONS`), planar points mixed with points in space,
+a gravity direction that is zero or not a vector of numbers, a turning frame for planar points
+or one that depends on the motion, and descriptions of more than
 :data:`MAX_COORDINATES` coordinates (the derivation would take minutes). A symbol given with
 other assumptions than the declared one of the same name (``Symbol("l")`` beside a
 ``positive`` ``l``), or a name in a string, is the declared symbol. Strings are parsed
