@@ -143,3 +143,24 @@ def test_the_foucault_pendulums_equilibrium_and_its_two_frequencies():
     assert still.angles == (0.0, 0.0)
     still_frequencies = np.abs(np.linalg.eigvals(np.array(still.jacobian, dtype=float)).imag)
     assert np.ptp(still_frequencies) < 1e-9
+
+
+def test_a_bead_on_a_turning_hoop_rises_to_the_angle_the_centrifugal_force_sets():
+    """A bead on a hoop of radius R turning at W about its vertical diameter, written in the
+    hoop's frame: above W^2 R = g it rests at cos(theta) = g / (R W^2), on either side."""
+    import sympy as sp
+
+    th = sp.Symbol("theta", real=True)
+    m, radius, g, spin = sp.symbols("m R g W", positive=True)
+
+    def hoop(rate):
+        return pl.mechanical_system(
+            [th], {m: 1.0, radius: 0.5, g: G, spin: rate},
+            points=[(radius * sp.sin(th), 0, -radius * sp.cos(th))], masses=[m], gravity=g,
+            frame_rotation=(0, 0, spin), name="a bead on a turning hoop")
+
+    fast = sorted(eq.angles[0] for eq in hoop(6.0).equilibria)
+    side = np.arccos(G / (0.5 * 6.0 ** 2))
+    assert fast == pytest.approx([-side, 0.0, side], abs=1e-9)
+    # negative control: below the threshold only the bottom
+    assert [eq.angles for eq in hoop(4.0).equilibria] == [(0.0,)]

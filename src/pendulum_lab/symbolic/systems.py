@@ -106,8 +106,8 @@ _LARGEST_EXPONENT = 100
 #: values (positive ones only for a coordinate declared positive).
 _SEARCH_VALUES = (-30.0, -10.0, -3.0, -1.0, -0.3, 0.3, 1.0, 3.0, 10.0, 30.0)
 _SEARCH_POINTS = 4000
-#: Random places in [-1, 1] per coordinate that Newton's method also starts from, for the
-#: equilibria of points in a turning frame (besides the origin).
+#: Random places in [-1, 1] per coordinate that Newton's method also starts from (each with
+#: its mirror image), for the equilibria of points in a turning frame (besides the origin).
 _NEWTON_STARTS = 8
 
 
@@ -973,8 +973,8 @@ class MechanicalSystem:
         finish in five minutes on the Foucault pendulum's equations (a square root, and
         centrifugal terms some 1e-10 of gravity), so their equilibria are found numerically
         instead, by Newton's method from the origin and from :data:`_NEWTON_STARTS` other
-        places, at the values ``subs`` gives every parameter; each is then checked and
-        linearised as :meth:`equilibrium_at` does.
+        places and their mirror images, at the values ``subs`` gives every parameter; each is
+        then checked and linearised as :meth:`equilibrium_at` does.
         """
         if self.frame_rotation is not None:
             return self._equilibria_by_newton(subs)
@@ -1009,7 +1009,8 @@ class MechanicalSystem:
         residual = sp.lambdify(list(self.q), list(forcing), modules="numpy", cse=True)
         slope = sp.lambdify(list(self.q), forcing.jacobian(self.q), modules="numpy", cse=True)
         rng = np.random.default_rng(20261207)
-        starts = np.vstack([np.zeros(self.n), rng.uniform(-1, 1, (_NEWTON_STARTS, self.n))])
+        places = rng.uniform(-1, 1, (_NEWTON_STARTS, self.n))
+        starts = np.vstack([np.zeros(self.n), places, -places])  # mirrored: symmetric pairs
         points = []
         for q in starts:
             with np.errstate(all="ignore"):
