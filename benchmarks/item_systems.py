@@ -1,8 +1,9 @@
 """Item 15: systems described by their points against chains of the same number of coordinates.
 
-Two measurements per system (the elastic pendulum and the cart pendulum against the double
-pendulum, the Kapitza pendulum against the driven pendulum, the chain of one link whose field
-also depends on the time through a cosine):
+Two measurements per system (the elastic pendulum, the cart pendulum and the spherical
+pendulum, whose bob moves in space, against the double pendulum; the Kapitza pendulum against
+the driven pendulum, the chain of one link whose field also depends on the time through a
+cosine):
 
 * **first use**: in a fresh process with an empty kernel cache, the seconds from
   ``import pendulum_lab`` to the end of a first ``pl.simulate`` with RK4: building the model
@@ -38,6 +39,7 @@ SYSTEMS = {
     "elastic": ("elastic_pendulum", [1.05, 0.5], "double_pendulum", [1.0, 0.5]),
     "cart": ("cart_pendulum", [0.0, 1.0], "double_pendulum", [1.0, 0.5]),
     "kapitza": ("kapitza_pendulum", [3.0], "driven_pendulum", [1.0]),
+    "spherical": ("spherical_pendulum", [0.3, 0.0], "double_pendulum", [1.0, 0.5]),
 }
 
 _FIRST_USE = """
@@ -111,7 +113,7 @@ def per_evaluation_pair(name: str, steps: int, rounds: int) -> dict:
 
 
 def bench_systems(cfg: Config) -> Section:
-    """First use and cost per evaluation of three systems against chains of their size."""
+    """First use and cost per evaluation of four systems against chains of their size."""
     rows, details, data = [], [], {}
     steps = cfg.systems_steps
     for name, (factory, theta0, chain, chain_theta0) in SYSTEMS.items():

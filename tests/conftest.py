@@ -19,3 +19,8 @@ def kapitza():
 @pytest.fixture(scope="session")
 def cart():
     return pl.cart_pendulum()
+
+
+@pytest.fixture(scope="session")
+def spherical():
+    return pl.spherical_pendulum()

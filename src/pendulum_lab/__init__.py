@@ -44,10 +44,12 @@ from .model import (
     double_pendulum,
     driven_pendulum,
     elastic_pendulum,
+    foucault_pendulum,
     kapitza_pendulum,
     mechanical_system,
     n_pendulum,
     simple_pendulum,
+    spherical_pendulum,
 )
 from .symbolic import Chain, MechanicalSystem, derive_chain
 from .version import __version__
@@ -124,6 +126,7 @@ __all__ = [
     "double_pendulum",
     "driven_pendulum",
     "elastic_pendulum",
+    "foucault_pendulum",
     "get_method",
     "hamiltonian_field",
     "henon_step",
@@ -135,6 +138,7 @@ __all__ = [
     "simple_pendulum",
     "simulate",
     "simulate_segments",
+    "spherical_pendulum",
     "step",
     "step_count",
     "warm_up",

@@ -107,9 +107,9 @@ def test_a_string_of_arithmetic_and_accepted_functions_is_read():
 def test_a_point_not_nested_is_refused_as_a_type_error():
     with pytest.raises(TypeError, match=r"`points\[0\]` must be an \(x, y\) pair"):
         pendulum(points=[l * sp.sin(th), -l * sp.cos(th)])
-    with pytest.raises(ValueError, match=r"`points\[0\]` must be an \(x, y\) pair \(points "
-                                         "move in a plane\\), got 3"):
-        pendulum(points=[(l * sp.sin(th), -l * sp.cos(th), 0)])
+    with pytest.raises(ValueError, match=r"`points\[0\]` must be an \(x, y\) pair \(a point "
+                                         r"in a plane\) or an \(x, y, z\) triple .*got 4"):
+        pendulum(points=[(l * sp.sin(th), -l * sp.cos(th), 0, 0)])
     assert pendulum().points == [(l * sp.sin(th), -l * sp.cos(th))]  # negative control
 
 

@@ -28,8 +28,10 @@ from .system import (
     SystemModel,
     cart_pendulum,
     elastic_pendulum,
+    foucault_pendulum,
     kapitza_pendulum,
     mechanical_system,
+    spherical_pendulum,
 )
 
 __all__ = [
@@ -41,8 +43,10 @@ __all__ = [
     "SystemModel",
     "cart_pendulum",
     "elastic_pendulum",
+    "foucault_pendulum",
     "kapitza_pendulum",
     "mechanical_system",
+    "spherical_pendulum",
     "double_pendulum",
     "driven_pendulum",
     "family_parameter",

@@ -180,7 +180,8 @@ class CompiledSystem:
         coordinates = [c for point in system.points for c in point]
         self.points = len(system.points)
         if coordinates:
-            self._positions = _lambdify(config_args, coordinates, (self.points, 2))
+            self._positions = _lambdify(config_args, coordinates,
+                                        (self.points, system.dimensions))
         self.has_offset = any(b != 0 for b in system.momentum_offset)
 
     def mass_matrix(self, q, params, t):

@@ -478,6 +478,9 @@ class PendulumModel:
         bottom = np.concatenate([self._fn.lag_qq(*args) + rate_w @ dw_dq, rate_w @ inv_mass], -1)
         return np.concatenate([top, bottom], axis=-2)
 
+    #: A chain swings in a plane: its positions are ``(x, y)``.
+    dimensions = 2
+
     def positions(self, theta, t=None) -> tuple[np.ndarray, np.ndarray]:
         """Cartesian bob positions ``(x, y)``, each shape ``(..., n)``, pivot at the origin
         (``t`` is accepted for the protocol a :class:`~pendulum_lab.model.SystemModel`

@@ -10,7 +10,8 @@ a chain, whatever they are (a length, a cart's position). The kernels come from 
 generator of :mod:`pendulum_lab.codegen.kernels`.
 
 :func:`mechanical_system` builds one from a description; :func:`elastic_pendulum`,
-:func:`kapitza_pendulum` and :func:`cart_pendulum` are the classics of a mechanics course.
+:func:`kapitza_pendulum` and :func:`cart_pendulum` are the classics of a mechanics course in a
+plane, :func:`spherical_pendulum` and :func:`foucault_pendulum` two in space.
 """
 
 from __future__ import annotations
@@ -40,9 +41,14 @@ __all__ = [
     "SystemModel",
     "cart_pendulum",
     "elastic_pendulum",
+    "foucault_pendulum",
     "kapitza_pendulum",
     "mechanical_system",
+    "spherical_pendulum",
 ]
+
+#: The Earth's rate of rotation relative to the stars [rad/s] (one turn per sidereal day).
+EARTH_ROTATION = 7.2921e-5
 
 
 class SystemModel(PendulumModel):
@@ -164,12 +170,18 @@ class SystemModel(PendulumModel):
 
     @functools.cached_property
     def hamiltonian_is_energy(self) -> bool:
-        """Whether ``H = T + V``: the kinetic energy is quadratic in the velocities (no
-        moving pivot). Otherwise ``H - (T + V) = -b q' - 2 T_0``, with ``b`` the momentum
-        offset and ``T_0`` the kinetic energy at rest, the points' motion the time imposes."""
-        rest = {w: 0 for w in self.system.omega}
-        return bool(all(b == 0 for b in self.system.momentum_offset)
-                    and sp.expand(self.system.kinetic.xreplace(rest)) == 0)
+        """Whether ``H = T + V``: the kinetic energy is quadratic in the velocities and the
+        Lagrangian at rest is ``-V``. True without a moving pivot, and for points written in a
+        turning frame (the Foucault pendulum: ``T`` and ``V`` as seen in that frame, the
+        centrifugal potential in ``V``; ``H`` is Jacobi's integral). Otherwise (a moving
+        pivot) ``H - (T + V) = -b q' - 2 T_0``, with ``b`` the momentum offset and ``T_0`` the
+        kinetic energy at rest, the points' motion the time imposes."""
+        system = self.system
+        rest = {w: 0 for w in system.omega}
+        # A velocity-linear part of L (b q', the Coriolis terms) drops out of p q' - L.
+        kinetic = sp.Poly(system.kinetic, *system.omega)
+        return bool(all(sum(powers) == 2 for powers in kinetic.monoms())
+                    and sp.expand(system.lagrangian.xreplace(rest) + system.potential) == 0)
 
     @property
     def damping(self) -> str:
@@ -299,7 +311,8 @@ class SystemModel(PendulumModel):
                        + self._fn.generalized_forces(theta, omega, self._params, t))
 
     def kinetic_energy(self, theta, omega, t=None) -> np.ndarray:
-        """``T``: the points' kinetic energy (for a moving pivot, in the fixed frame)."""
+        """``T``: the points' kinetic energy (for a moving pivot, in the fixed frame; for
+        points written in a turning frame, as seen in that frame)."""
         return self._fn.kinetic(self._states("theta", theta), self._states("omega", omega),
                                 self._params, self._time(t))
 
@@ -333,11 +346,17 @@ class SystemModel(PendulumModel):
                                 -1)
         return np.concatenate([top, bottom], axis=-2)
 
-    def positions(self, theta, t=None) -> tuple[np.ndarray, np.ndarray]:
-        """Cartesian positions ``(x, y)`` of the points, each shape ``(..., points)``."""
+    @property
+    def dimensions(self) -> int:
+        """3 for points given as ``(x, y, z)`` (in space, ``z`` up by default), else 2."""
+        return self.system.dimensions
+
+    def positions(self, theta, t=None) -> tuple[np.ndarray, ...]:
+        """Cartesian positions ``(x, y)`` of the points (``(x, y, z)`` for points in space),
+        each shape ``(..., points)``."""
         self._require_points()
-        xy = self._fn.positions(self._states("theta", theta), self._params, self._time(t))
-        return xy[..., 0], xy[..., 1]
+        xyz = self._fn.positions(self._states("theta", theta), self._params, self._time(t))
+        return tuple(xyz[..., k] for k in range(self.dimensions))
 
     def _require_points(self) -> None:
         if not self._fn.points:
@@ -354,10 +373,10 @@ class SystemModel(PendulumModel):
         masses = tuple(float(sp.sympify(m).xreplace(values)) for m in self.system.masses)
         moved = set(self.system.q)
         movable = tuple(
-            None if (sp.sympify(x).free_symbols | sp.sympify(y).free_symbols) & moved else
+            None if set().union(*(sp.sympify(c).free_symbols for c in point)) & moved else
             f"point {k} of {self.system.name} does not move with the coordinates (its motion "
             "is prescribed), so dragging it cannot set them; drag a point the coordinates place"
-            for k, (x, y) in enumerate(self.system.points))
+            for k, point in enumerate(self.system.points))
         return Drawing(masses=masses, rods=tuple(self.system.joints),
                        springs=tuple(self.system.springs), movable=movable)
 
@@ -379,6 +398,10 @@ class SystemModel(PendulumModel):
             singular mass matrix, such as ``r = 0`` of polar coordinates).
         """
         drawing = self.drawing
+        if self.dimensions != 2:
+            raise ValueError(f"{self.system.name} moves in space: a point placed at (x, y) on "
+                             "a flat picture does not fix its height, so dragging cannot set "
+                             "its coordinates; give them as numbers (`theta`) instead")
         point = check.index_below("point", point, len(drawing.masses))
         if drawing.movable[point] is not None:
             raise ValueError(drawing.movable[point])
@@ -496,13 +519,16 @@ def mechanical_system(coordinates, parameters, *, points=None, masses=None, grav
                       potential=0, lagrangian=None, velocities=None, dissipation=0,
                       forces=None, joints=None, springs=None,
                       name: str = "a mechanical system", period: float | None = None,
-                      start=None) -> SystemModel:
+                      start=None, gravity_direction=None,
+                      frame_rotation=None) -> SystemModel:
     """A model of any holonomic system: from its points (or its Lagrangian) to ``simulate``.
 
     The arguments are those of :class:`~pendulum_lab.symbolic.systems.MechanicalSystem`
     (``coordinates``, ``parameters`` with default values, ``points`` with ``masses``,
     ``gravity``, ``potential``, or a ``lagrangian``; ``dissipation``, ``forces``; the
-    ``joints`` drawn as rods and the ``springs``), plus ``period``, the period of a time
+    ``joints`` drawn as rods and the ``springs``; for points in space, ``(x, y, z)``,
+    ``gravity_direction`` (default ``-z``) and ``frame_rotation``, the angular velocity of a
+    rotating frame the points are written in), plus ``period``, the period of a time
     dependence (a number or an expression of the parameters; by default derived from the
     equations when they are periodic in ``t``), and ``start``, the coordinates the
     simulators start from.
@@ -521,7 +547,9 @@ def mechanical_system(coordinates, parameters, *, points=None, masses=None, grav
     system = MechanicalSystem(coordinates, parameters, points=points, masses=masses,
                               gravity=gravity, potential=potential, lagrangian=lagrangian,
                               velocities=velocities, dissipation=dissipation, forces=forces,
-                              joints=joints, springs=springs, name=name)
+                              joints=joints, springs=springs, name=name,
+                              gravity_direction=gravity_direction,
+                              frame_rotation=frame_rotation)
     return SystemModel(system, period=period, start=start)
 
 
@@ -647,3 +675,97 @@ def cart_pendulum(cart_mass: float = 1.0, mass: float = 0.5, length: float = 1.0
                               masses=[big_m, m], gravity=grav, joints=[(0, 1)],
                               name="the pendulum on a cart")
     return _made_by(model, "cart_pendulum", start=[0.0, 1.0])
+
+
+def _bob_in_space(length_symbol) -> tuple:
+    """``(x, y)`` of a bob on a rod of length ``l`` from the origin, and its position
+    ``(x, y, z)`` below the pivot (``z = -sqrt(l^2 - x^2 - y^2)``)."""
+    x, y = sp.symbols("x y", real=True)
+    return x, y, (x, y, -sp.sqrt(length_symbol ** 2 - x ** 2 - y ** 2))
+
+
+def spherical_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> SystemModel:
+    """A bob on a rod that turns freely in every direction about a fixed pivot.
+
+    Coordinates ``(x, y)``: the bob's horizontal position [m], ``z = -sqrt(l^2 - x^2 - y^2)``
+    below the pivot (``z`` up, gravity along ``-z``). These are regular wherever the bob is
+    below the pivot's level, bottom included, where the course runs it (small and moderate
+    swings, the nearly elliptical orbits of Airy's precession); they fail only at the level of
+    the pivot (``x^2 + y^2 = l^2``, where ``z`` turns). The usual angles ``(theta, phi)`` fail
+    at the bottom instead: there ``phi`` is undefined, and an orbit that passes near the
+    bottom turns ``phi`` by nearly pi in a moment.
+
+    The vertical angular momentum ``L_z = m (x y' - y x')``, which is ``x p_y - y p_x`` in
+    the canonical momenta, is conserved (gravity and the rod exert no torque about the
+    vertical axis).
+    """
+    m, rod, grav = sp.symbols("m l g", positive=True)
+    values = {m: _positive("mass", mass), rod: _positive("length", length),
+              grav: _positive("g", g)}
+    x, y, bob = _bob_in_space(rod)
+    model = mechanical_system([x, y], values, points=[bob], masses=[m], gravity=grav,
+                              name="the spherical pendulum")
+    return _made_by(model, "spherical_pendulum", start=[0.5 * values[rod], 0.0])
+
+
+def _latitude(latitude) -> float:
+    """``latitude`` in degrees as a float, if it is a real number in [-90, 90]."""
+    if isinstance(latitude, (bool, np.bool_)) or not isinstance(latitude, numbers.Real):
+        raise TypeError(f"`latitude` must be a number of degrees in [-90, 90], got "
+                        f"{latitude!r} ({type(latitude).__name__})")
+    if not (math.isfinite(latitude) and -90 <= latitude <= 90):
+        raise ValueError(f"`latitude` must be a number of degrees in [-90, 90] (north "
+                         f"positive), got {latitude!r}")
+    return float(latitude)
+
+
+def foucault_pendulum(latitude: float = 48.85, length: float = 1.0, mass: float = 1.0,
+                      g: float = 9.81, rotation_rate: float = EARTH_ROTATION) -> SystemModel:
+    """A spherical pendulum in a laboratory on the turning Earth, at ``latitude`` degrees.
+
+    The points are written in the laboratory's frame (``x`` east, ``y`` north, ``z`` up,
+    pivot at the origin), which turns with the Earth at ``Omega = rotation_rate`` about the
+    Earth's axis: in those axes ``Omega (0, cos(lat), sin(lat))``. The Lagrangian is built
+    from the bob's inertial velocity ``r' + Omega x r`` (``frame_rotation`` of
+    :func:`mechanical_system`), so the Coriolis and centrifugal forces come out of the
+    derivation. ``g`` is the local gravity a plumb line shows: the centrifugal acceleration of
+    the laboratory's distance from the Earth's axis is constant in the laboratory and is part
+    of it, so the frame turns about an axis through the pivot.
+
+    Coordinates ``(x, y)``, the bob's horizontal position, as for :func:`spherical_pendulum`
+    and for the same reason: a Foucault pendulum swings through the bottom, where angles
+    ``(theta, phi)`` fail, while ``(x, y)`` fail only at the pivot's level. Its plane of swing
+    turns clockwise (seen from above) at ``Omega sin(lat)`` in the northern hemisphere.
+
+    Parameters
+    ----------
+    latitude : float
+        Degrees in [-90, 90], north positive (the default is Paris, the Panthéon's
+        pendulum). The model's parameter ``lat`` holds it in radians.
+    length, mass, g : float
+        The rod's length [m], the bob's mass [kg], the local gravity [m/s^2].
+    rotation_rate : float
+        ``Omega`` [rad/s], the Earth's by default; a larger one speeds the turning up for a
+        short simulation (the Coriolis force stays small beside gravity while ``Omega`` is
+        far below the swing's ``sqrt(g / l)``).
+    """
+    lat_degrees = _latitude(latitude)
+    if isinstance(rotation_rate, (bool, np.bool_)) or not isinstance(rotation_rate,
+                                                                     numbers.Real):
+        raise TypeError(f"`rotation_rate` must be a real number of rad/s, got "
+                        f"{rotation_rate!r} ({type(rotation_rate).__name__})")
+    if not math.isfinite(rotation_rate):
+        raise ValueError(f"`rotation_rate` must be finite, got {rotation_rate!r}")
+    m, rod, grav = sp.symbols("m l g", positive=True)
+    spin, lat = sp.symbols("Omega lat", real=True)
+    values = {m: _positive("mass", mass), rod: _positive("length", length),
+              grav: _positive("g", g), spin: float(rotation_rate),
+              lat: math.radians(lat_degrees)}
+    x, y, bob = _bob_in_space(rod)
+    model = mechanical_system(
+        [x, y], values, points=[bob], masses=[m], gravity=grav,
+        frame_rotation=(0, spin * sp.cos(lat), spin * sp.sin(lat)),
+        name="the Foucault pendulum")
+    model = _made_by(model, "foucault_pendulum", start=[0.1 * values[rod], 0.0])
+    model.factory = f"pl.foucault_pendulum(latitude={lat_degrees:g})"
+    return model

@@ -16,7 +16,17 @@ from matplotlib.axes import Axes
 
 from ..model.pendulum import Drawing, PendulumModel
 
-__all__ = ["drawing_frame", "joined_paths", "rod_chains", "spring_path", "view_reach"]
+__all__ = ["VIEWS", "drawing_frame", "joined_paths", "rod_chains", "spring_path", "view_reach"]
+
+#: The views of a model's drawing, by its number of dimensions: for each, the two axes drawn
+#: (indices into ``model.positions``), their labels and the view's name. A system in space is
+#: drawn from above (x, y) and from the side (x, z), z up.
+VIEWS = {
+    2: (((0, 1), ("x (m)", "y (m)"), None),),
+    3: (((0, 1), ("x (m)", "y (m)"), "from above"),
+        ((0, 2), ("x (m)", "z (m)"), "from the side")),
+}
+
 
 #: Zigzags of a drawn spring, and its half-width as a share of the view's reach.
 SPRING_TURNS = 9
@@ -103,12 +113,15 @@ def view_reach(model: PendulumModel, x=None, y=None) -> float:
     return farthest if farthest > 0 else 1.0
 
 
-def drawing_frame(ax: Axes, model: PendulumModel, x=None, y=None, margin: float = 1.1) -> float:
+def drawing_frame(ax: Axes, model: PendulumModel, x=None, y=None, margin: float = 1.1,
+                  labels=("x (m)", "y (m)")) -> float:
     """Square axes in metres reaching ``margin`` times :func:`view_reach`, and the fixed pivot
-    where a rod or spring hangs from it; returns the reach drawn."""
+    where a rod or spring hangs from it; returns the reach drawn. ``labels``: those of the
+    two axes (a view of a system in space draws ``x, z``)."""
     reach = margin * view_reach(model, x, y)
     ax.set(
-        xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel="x (m)", ylabel="y (m)"
+        xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel=labels[0],
+        ylabel=labels[1],
     )
     if model.drawing.uses_origin:
         ax.plot([0], [0], "s", color="black", ms=6, zorder=4)

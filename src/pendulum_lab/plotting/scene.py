@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import io
 import math
+from dataclasses import dataclass
 
 import matplotlib as mpl
 import numpy as np
@@ -22,7 +23,7 @@ from PIL import Image
 from .. import validation as check
 from ..driver.simulate import Trajectory, step_count
 from ..model import PendulumModel, require_model
-from .drawing import drawing_frame, joined_paths
+from .drawing import VIEWS, drawing_frame, joined_paths
 from .figures import KINETIC, POTENTIAL, TOTAL
 from .png import png_bytes
 
@@ -36,6 +37,7 @@ __all__ = [
     "RUN_COLOURS",
     "TRAIL_COLOUR",
     "PendulumScene",
+    "SceneView",
     "check_run",
     "encode_frame",
     "export_scene",
@@ -61,6 +63,21 @@ TRAIL_COLOUR = "tab:purple"
 BOB_COLOUR = "tab:red"
 #: One colour per run when a scene overlays several (chain, trail and energies of that run).
 RUN_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")
+
+
+@dataclass
+class SceneView:
+    """One view of a scene: its axes, the two coordinates it draws (indices into
+    ``model.positions``), each run's ``(rods, bobs, trail)`` and ``(springs, pivots)``
+    artists, each run's projected positions ``(u, v)`` (shape ``(states, points)`` each), and
+    the view's reach [m]."""
+
+    ax: object
+    axes: tuple
+    chains: list
+    parts: list
+    positions: list
+    reach: float
 
 
 def _run_title(traj: Trajectory) -> str:
@@ -174,9 +191,11 @@ class PendulumScene:
     Left: rods, springs, bobs (one size for a chain's equal masses, smaller for lighter ones),
     massless points (a shaken pivot) as small marks, the fixed pivot, and the path of the
     last massive point over the past ``trail`` seconds (a chain and a system given by its
-    points, through :attr:`~pendulum_lab.PendulumModel.drawing`). Right: kinetic, potential and
-    total energy from the start to the current time, over a faint line of the
-    initial energy, and a readout of the time and the three energies.
+    points, through :attr:`~pendulum_lab.PendulumModel.drawing`); a system in space
+    (``model.dimensions == 3``) in two views side by side, from above (x, y) and from the
+    side (x, z), each with the trail (:data:`~pendulum_lab.plotting.drawing.VIEWS`).
+    Right: kinetic, potential and total energy from the start to the current time, over a
+    faint line of the initial energy, and a readout of the time and the three energies.
     :meth:`show` moves everything to one saved state and returns the artists
     it changed (the only ones to redraw).
 
@@ -217,7 +236,9 @@ class PendulumScene:
     labels : list of str
     rods, bobs, trail_line : matplotlib.lines.Line2D
         Those of the first run; ``chains`` holds ``(rods, bobs, trail_line)`` of each run,
-        ``parts`` its ``(springs, pivots)`` (massless points).
+        ``parts`` its ``(springs, pivots)`` (massless points), in the first view.
+    views : list of SceneView
+        Every view (one in a plane, two in space) with its own artists.
     energy_lines : dict
         One run: ``"kinetic"``, ``"potential"``, ``"total"`` -> Line2D.
         Several: ``("kinetic", k)`` and ``("total", k)`` for run ``k``.
@@ -247,8 +268,8 @@ class PendulumScene:
             require_same_system(run, model)
         trail = check.non_negative_number("trail", trail)
         self.model, self.runs, self.traj = model, runs, runs[0]
-        self._positions = [model.positions(run.theta, run.t) for run in runs]
-        self.x, self.y = self._positions[0]
+        positions = [model.positions(run.theta, run.t) for run in runs]
+        self.x, self.y = positions[0][:2]
         self.drawing = model.drawing
         masses = np.asarray(self.drawing.masses)
         self._heavy = masses > 0
@@ -260,31 +281,46 @@ class PendulumScene:
         # Room above the panels for the readout and the legend: two lines of text.
         top = 1 - 3.6 * size / 72 / figure.get_figheight()
         bottom = 3.4 * size / 72 / figure.get_figheight()  # tick labels and the axis label
+        views = VIEWS[model.dimensions]
         grid = figure.add_gridspec(
-            1, 2, width_ratios=(1, 1.6), left=0.07, right=0.965, bottom=bottom, top=top,
-            wspace=0.2,
+            1, 2, width_ratios=(1.9 if len(views) > 1 else 1, 1.6), left=0.07, right=0.965,
+            bottom=bottom, top=top, wspace=0.2,
         )
-        chain = figure.add_subplot(grid[0])
-        self._reach = drawing_frame(chain, model, [p[0] for p in self._positions],
-                                    [p[1] for p in self._positions], margin=1.08)
+        cells = [grid[0]] if len(views) == 1 else list(grid[0].subgridspec(1, len(views),
+                                                                           wspace=0.35))
+        every = [np.concatenate([np.ravel(c) for run in positions for c in run])]
         titles = {_run_title(run) for run in runs}
-        chain.set_title(titles.pop() if len(titles) == 1 else "", fontsize=size)
         bob_size = 10 * math.sqrt(masses[self._heavy].min() / masses.max())
         if len(runs) == 1:
             colours = [(TRAIL_COLOUR, "0.25", BOB_COLOUR)]
         else:
             colours = [(colour, colour, colour) for colour in RUN_COLOURS[: len(runs)]]
-        self.chains, self.parts = [], []
-        for k, (trail_colour, rod_colour, bob_colour) in enumerate(colours):
-            trail_line = chain.plot([], [], color=trail_colour, lw=1.0, alpha=0.6, zorder=1 + k)[0]
-            rods = chain.plot([], [], color=rod_colour, lw=2.5, zorder=2 + k)[0]
-            bobs = chain.plot(
-                [], [], "o", color=bob_colour, mec="black", zorder=2.5 + k, ms=bob_size
-            )[0]
-            self.chains.append((rods, bobs, trail_line))
-            springs = chain.plot([], [], color=rod_colour, lw=1.2, zorder=2 + k)[0]
-            pivots = chain.plot([], [], "s", color="black", ms=5, zorder=2.6 + k)[0]
-            self.parts.append((springs, pivots))
+        # One drawing per view (a plane: one; space: from above and from the side), each
+        # with every run's chain, parts and trail, drawn from the view's two axes.
+        self.views = []
+        for cell, (axes, labels, name) in zip(cells, views):
+            chain = figure.add_subplot(cell)
+            reach = drawing_frame(chain, model, every, every, margin=1.08, labels=labels)
+            if name:
+                chain.text(0.03, 0.97, name, transform=chain.transAxes, ha="left", va="top",
+                           fontsize=0.85 * size, color="0.35")
+            chains, parts = [], []
+            for k, (trail_colour, rod_colour, bob_colour) in enumerate(colours):
+                trail_line = chain.plot([], [], color=trail_colour, lw=1.0, alpha=0.6,
+                                        zorder=1 + k)[0]
+                rods = chain.plot([], [], color=rod_colour, lw=2.5, zorder=2 + k)[0]
+                bobs = chain.plot(
+                    [], [], "o", color=bob_colour, mec="black", zorder=2.5 + k, ms=bob_size
+                )[0]
+                chains.append((rods, bobs, trail_line))
+                springs = chain.plot([], [], color=rod_colour, lw=1.2, zorder=2 + k)[0]
+                pivots = chain.plot([], [], "s", color="black", ms=5, zorder=2.6 + k)[0]
+                parts.append((springs, pivots))
+            projected = [(run[axes[0]], run[axes[1]]) for run in positions]
+            self.views.append(SceneView(chain, axes, chains, parts, projected, reach))
+        first = self.views[0]
+        first.ax.set_title(titles.pop() if len(titles) == 1 else "", fontsize=size)
+        self.chains, self.parts, self._reach = first.chains, first.parts, first.reach
         self.rods, self.bobs, self.trail_line = self.chains[0]
 
         energy = figure.add_subplot(grid[1])
@@ -320,7 +356,7 @@ class PendulumScene:
             xlabel="t (s)",
             ylabel="energy (J)",
         )
-        for ax in (chain, energy):
+        for ax in (*(view.ax for view in self.views), energy):
             ax.tick_params(labelsize=0.9 * size)
             ax.xaxis.label.set_fontsize(size)
             ax.yaxis.label.set_fontsize(size)
@@ -339,7 +375,8 @@ class PendulumScene:
         # Blitting draws in this order: each run's trail, rods, bobs; a later run over an earlier.
         self.artists = [
             artist
-            for (rods, bobs, trail), (springs, pivots) in zip(self.chains, self.parts)
+            for view in self.views
+            for (rods, bobs, trail), (springs, pivots) in zip(view.chains, view.parts)
             for artist in (trail, rods, springs, bobs, pivots)
         ]
         self.artists += list(self.energy_lines.values())
@@ -359,15 +396,17 @@ class PendulumScene:
         self.index = index
         first = max(0, index - self._trail_states)
         heavy, last = self._heavy, self._trailed
-        for (rods, bobs, trail_line), (springs, pivots), (x, y) in zip(
-            self.chains, self.parts, self._positions
-        ):
-            trail_line.set_data(x[first : index + 1, last], y[first : index + 1, last])
-            rod_path, spring_path = joined_paths(self.drawing, x[index], y[index], self._reach)
-            rods.set_data(rod_path[:, 0], rod_path[:, 1])
-            springs.set_data(spring_path[:, 0], spring_path[:, 1])
-            bobs.set_data(x[index][heavy], y[index][heavy])
-            pivots.set_data(x[index][~heavy], y[index][~heavy])
+        for view in self.views:
+            for (rods, bobs, trail_line), (springs, pivots), (x, y) in zip(
+                view.chains, view.parts, view.positions
+            ):
+                trail_line.set_data(x[first : index + 1, last], y[first : index + 1, last])
+                rod_path, spring_path = joined_paths(self.drawing, x[index], y[index],
+                                                     view.reach)
+                rods.set_data(rod_path[:, 0], rod_path[:, 1])
+                springs.set_data(spring_path[:, 0], spring_path[:, 1])
+                bobs.set_data(x[index][heavy], y[index][heavy])
+                pivots.set_data(x[index][~heavy], y[index][~heavy])
         t = self.traj.t[: index + 1]
         for key, values in self._energies.items():
             self.energy_lines[key].set_data(t, values[: index + 1])

@@ -31,7 +31,7 @@ from ..model.pendulum import PendulumModel
 
 if TYPE_CHECKING:  # geometric imports plotting's neighbours; only the type is needed here
     from ..geometric import ModifiedEnergy
-from .drawing import drawing_frame, joined_paths, view_reach
+from .drawing import VIEWS, drawing_frame, joined_paths, view_reach
 from .figures import (
     KINETIC,
     LIBRATION,
@@ -375,12 +375,17 @@ def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=Non
     """The model at coordinates ``theta`` (time ``t``): rods, springs, points (area
     proportional to mass; a massless point, such as a shaken pivot, as a small mark), pivot.
 
+    A system in space (``model.dimensions == 3``) is drawn in two views side by side, from
+    above (x, y) and from the side (x, z): into ``ax`` given as a pair of axes, or into two
+    halves of a single ``ax`` (its own frame hidden), or into a new figure.
+
     Parameters
     ----------
     model : PendulumModel
         A chain, or a system given by its points (:attr:`~pendulum_lab.SystemModel.drawing`).
     theta : array_like, shape (n,)
     ax : Axes, optional
+        Or, for a system in space, a pair of Axes.
     trail : array_like, shape (N, n), optional
         Earlier coordinates; the path of the last massive point is drawn faintly.
     t, trail_t : float and array_like of shape (N,), optional
@@ -390,27 +395,50 @@ def draw_pendulum(model: PendulumModel, theta, ax: Axes | None = None, trail=Non
     if theta.shape != (model.n,):
         raise ValueError(f"`theta` must have shape ({model.n},), got {theta.shape}")
     drawing = model.drawing
-    ax = get_axes(ax, width=4.0, height=4.0)
+    views = VIEWS[model.dimensions]
+    axes = _view_axes(ax, len(views))
     masses = np.asarray(drawing.masses)
-    x, y = model.positions(theta, t)
-    seen_x, seen_y = [x], [y]
+    position = model.positions(theta, t)
+    seen = [np.ravel(c) for c in position]
     if trail is not None:
-        tx, ty = model.positions(np.asarray(trail, dtype=float), trail_t)
-        last = np.flatnonzero(masses > 0)[-1]
-        ax.plot(tx[:, last], ty[:, last], color="tab:purple", lw=0.7, alpha=0.5)
-        seen_x.append(tx), seen_y.append(ty)
-    seen_x = np.concatenate([np.ravel(v) for v in seen_x])
-    seen_y = np.concatenate([np.ravel(v) for v in seen_y])
-    rods, springs = joined_paths(drawing, x, y, view_reach(model, seen_x, seen_y))
-    ax.plot(rods[:, 0], rods[:, 1], color="0.25", lw=2.5, zorder=2)
-    ax.plot(springs[:, 0], springs[:, 1], color="0.25", lw=1.2, zorder=2)
+        trail_position = model.positions(np.asarray(trail, dtype=float), trail_t)
+        seen += [np.ravel(c) for c in trail_position]
+    seen = np.concatenate(seen)
     heavy = masses > 0
-    ax.scatter(x[heavy], y[heavy], s=120 * masses[heavy] / masses.max(), color="tab:red",
-               edgecolor="black", zorder=3)
-    ax.plot(x[~heavy], y[~heavy], "s", color="black", ms=5, zorder=4)
-    drawing_frame(ax, model, seen_x, seen_y)
-    ax.set_title("Configuration")
-    return ax.figure
+    for view_ax, (pair, labels, name) in zip(axes, views):
+        x, y = position[pair[0]], position[pair[1]]
+        if trail is not None:
+            last = np.flatnonzero(heavy)[-1]
+            view_ax.plot(trail_position[pair[0]][:, last], trail_position[pair[1]][:, last],
+                         color="tab:purple", lw=0.7, alpha=0.5)
+        rods, springs = joined_paths(drawing, x, y, view_reach(model, seen, seen))
+        view_ax.plot(rods[:, 0], rods[:, 1], color="0.25", lw=2.5, zorder=2)
+        view_ax.plot(springs[:, 0], springs[:, 1], color="0.25", lw=1.2, zorder=2)
+        view_ax.scatter(x[heavy], y[heavy], s=120 * masses[heavy] / masses.max(),
+                        color="tab:red", edgecolor="black", zorder=3)
+        view_ax.plot(x[~heavy], y[~heavy], "s", color="black", ms=5, zorder=4)
+        drawing_frame(view_ax, model, seen, seen, labels=labels)
+        view_ax.set_title("Configuration" if name is None else f"Configuration {name}")
+    return axes[0].figure
+
+
+def _view_axes(ax, count: int) -> list:
+    """``count`` axes to draw a model's views into: ``ax`` itself for one view; for two, ``ax``
+    as a pair, or two halves of a single ``ax`` (whose own frame is hidden), or a new
+    figure's."""
+    if count == 1:
+        return [get_axes(ax, width=4.0, height=4.0)]
+    if ax is None:
+        return list(new_figure(1, count, width=4.0 * count, height=4.0)[1])
+    if isinstance(ax, Axes):
+        ax.set_axis_off()
+        return [ax.inset_axes([k / count + 0.06, 0.06, 1 / count - 0.1, 0.8])
+                for k in range(count)]
+    given = list(np.ravel(np.asarray(ax, dtype=object)))
+    if len(given) != count or not all(isinstance(a, Axes) for a in given):
+        raise ValueError(f"`ax` must be one matplotlib Axes or {count} of them (one per view "
+                         f"of a system in space), got {ax!r}")
+    return given
 
 
 # --------------------------------------------------------------------------- analyses

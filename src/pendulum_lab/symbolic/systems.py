@@ -2,7 +2,9 @@
 
 A :class:`MechanicalSystem` is described either by the Cartesian positions of point
 masses, as SymPy expressions of the generalized coordinates ``q`` and the time ``t``
-(a moving pivot is a position that depends on ``t``), with extra potential terms
+(a moving pivot is a position that depends on ``t``), in a plane ``(x, y)`` or in space
+``(x, y, z)`` (with the direction of gravity, and optionally a turning frame the points are
+written in: :class:`MechanicalSystem`'s ``frame_rotation``), with extra potential terms
 (springs), or directly by a Lagrangian ``L(q, q', t)``. Optional: Rayleigh's
 dissipation function ``R(q, q', t)`` and generalized forces ``Q(q, q', t)``. It derives,
 as :class:`~pendulum_lab.symbolic.mechanics.Chain` does for a chain::
@@ -27,7 +29,9 @@ neither coordinates, velocities, ``t`` nor declared parameters (named), names th
 momentum ``p_x``: SymPy would merge them), parameter values that are not real finite
 numbers (or break a parameter's declared assumption, such as ``positive``), masses that are
 not real, finite and non-negative, functions the equations cannot be generated from (named,
-with those accepted: :data:`ACCEPTED_FUNCTIONS`), and descriptions of more than
+with those accepted: :data:`ACCEPTED_FUNCTIONS`), planar points mixed with points in space,
+a gravity direction that is zero or not a vector of numbers, a turning frame for planar points
+or one that depends on the motion, and descriptions of more than
 :data:`MAX_COORDINATES` coordinates (the derivation would take minutes). A symbol given with
 other assumptions than the declared one of the same name (``Symbol("l")`` beside a
 ``positive`` ``l``), or a name in a string, is the declared symbol. Strings are parsed
@@ -102,6 +106,9 @@ _LARGEST_EXPONENT = 100
 #: values (positive ones only for a coordinate declared positive).
 _SEARCH_VALUES = (-30.0, -10.0, -3.0, -1.0, -0.3, 0.3, 1.0, 3.0, 10.0, 30.0)
 _SEARCH_POINTS = 4000
+#: Random places in [-1, 1] per coordinate that Newton's method also starts from (each with
+#: its mirror image), for the equilibria of points in a turning frame (besides the origin).
+_NEWTON_STARTS = 8
 
 
 def _symbol_list(name: str, values) -> list:
@@ -261,12 +268,26 @@ class MechanicalSystem:
     parameters : dict
         ``{symbol: default value}`` of every other symbol the description uses (``t``
         aside); the values must be real and finite.
-    points : sequence of (x, y) pairs of expressions, optional
-        Cartesian positions of point masses, functions of ``q`` and ``t``.
+    points : sequence of (x, y) pairs or of (x, y, z) triples of expressions, optional
+        Cartesian positions of point masses, functions of ``q`` and ``t``: all in a plane, or
+        all in space (not a mixture).
     masses : sequence of expressions, optional
         One mass per point (numbers or parameter symbols).
     gravity : expression, optional
-        ``g``: the potential ``sum m_i g y_i`` of the points (``y`` up). None: no gravity.
+        ``g``: the potential ``sum m_i g y_i`` of planar points (``y`` up), ``sum m_i g z_i``
+        of points in space (``z`` up). None: no gravity.
+    gravity_direction : sequence of numbers, optional
+        The direction gravity pulls, one entry per axis of the points (not zero; its length
+        does not matter): the potential is ``-sum m_i g d . r_i`` with ``d`` made a unit
+        vector. By default ``(0, -1)`` in a plane, ``(0, 0, -1)`` in space.
+    frame_rotation : sequence of three expressions, optional
+        For points in space written in a turning frame (a laboratory on the Earth): the
+        frame's angular velocity ``w`` [rad/s] in its own axes, numbers or expressions of
+        parameters, about an axis through the origin. The kinetic energy is built from the
+        inertial velocities ``r' + w x r``, so the Coriolis and centrifugal forces follow
+        from the derivation; ``kinetic`` is then ``1/2 m |r'|^2`` as seen in the frame, and
+        ``potential`` holds the centrifugal potential ``-1/2 m |w x r|^2`` besides
+        gravity's, so that ``T + V`` is the conserved Hamiltonian (Jacobi's integral).
     potential : expression, optional
         Further potential energy ``V(q, t)`` (springs).
     lagrangian : expression, optional
@@ -292,6 +313,11 @@ class MechanicalSystem:
     Attributes
     ----------
     n, q, omega, p, t, parameters, defaults
+    dimensions : int
+        2 for planar points (and for a system given by its Lagrangian), 3 for points in
+        space.
+    frame_rotation : list of sympy.Expr or None
+        The turning frame's angular velocity, as given.
     mass_matrix : sympy.Matrix, shape (n, n)
         ``M = d^2 L / dq'^2``.
     momentum_offset : sympy.Matrix, shape (n, 1)
@@ -314,7 +340,8 @@ class MechanicalSystem:
 
     def __init__(self, coordinates, parameters, *, points=None, masses=None, gravity=None,
                  potential=0, lagrangian=None, velocities=None, dissipation=0, forces=None,
-                 joints=None, springs=None, name: str = "a mechanical system"):
+                 joints=None, springs=None, name: str = "a mechanical system",
+                 gravity_direction=None, frame_rotation=None):
         self.q = sp.Matrix(_symbol_list("coordinates", coordinates))
         self.n = n = len(self.q)
         if n > MAX_COORDINATES:
@@ -342,30 +369,59 @@ class MechanicalSystem:
             raise TypeError("give exactly one of `points` (with `masses`) and `lagrangian`")
         if points is not None:
             points = [self._point(i, point) for i, point in
-                      enumerate(_sequence("points", points, "(x, y) pairs"))]
+                      enumerate(_sequence("points", points, "(x, y) or (x, y, z) tuples"))]
+            if points and any(len(point) != len(points[0]) for point in points):
+                odd = next(i for i, point in enumerate(points) if len(point) != len(points[0]))
+                raise ValueError(
+                    f"`points[{odd}]` has {len(points[odd])} coordinates and `points[0]` "
+                    f"{len(points[0])}: give every point as (x, y) (a planar system) or every "
+                    "point as (x, y, z) (in space), not a mixture")
             masses = [] if masses is None else _sequence("masses", masses, "masses")
             if len(masses) != len(points):
                 raise ValueError(f"`masses` must hold one mass per point ({len(points)})")
             self.points = points
+            self.dimensions = len(points[0]) if points else 2
             self.masses = [self._mass(i, m) for i, m in enumerate(masses)]
+            self.frame_rotation = self._frame_rotation(frame_rotation)
             expected = 0.05 * 1.5 ** max(0, max(
                 len(c.free_symbols & set(self.q)) for point in points for c in point))
-            kinetic = sp.Add(*(m * _tidy(self._rate(x) ** 2 + self._rate(y) ** 2) / 2
-                               for m, (x, y) in _progress(
+            kinetic = sp.Add(*(m * _tidy(sum(v ** 2 for v in self._inertial_velocity(point)))
+                               / 2 for m, point in _progress(
                                    list(zip(self.masses, points)),
                                    f"kinetic energy of {name} (point by point)",
                                    expected * len(points))))
+            if self.frame_rotation is not None:
+                # In the turning frame: T = 1/2 m |r'|^2 as seen there, and the rest of the
+                # inertial kinetic energy (velocity-linear Coriolis part, centrifugal part at
+                # rest) stays in L, the centrifugal part counted as potential energy below.
+                inertial = kinetic
+                kinetic = sp.Add(*(m * _tidy(sum(self._rate(c) ** 2 for c in point)) / 2
+                                   for m, point in zip(self.masses, points)))
             weight = 0 if gravity is None else self._expr("gravity", gravity)
+            down = self._gravity_direction(gravity_direction, gravity)
             potential = self._expr("potential", potential)
-            potential += sp.Add(*(m * weight * y for m, (_, y) in zip(self.masses, points)))
+            if down is None:  # straight down the last axis (y in a plane, z in space)
+                potential += sp.Add(*(m * weight * point[-1]
+                                      for m, point in zip(self.masses, points)))
+            else:
+                potential -= sp.Add(*(m * weight * sum(d * c for d, c in zip(down, point))
+                                      for m, point in zip(self.masses, points)))
             self.potential = sp.expand(potential)
             self.kinetic = sp.expand(kinetic)
             self.lagrangian = self.kinetic - self.potential
+            if self.frame_rotation is not None:
+                self.lagrangian = sp.expand(inertial) - self.potential
+                self.potential = -self.lagrangian.xreplace({w: 0 for w in self.omega})
         else:
             if potential != 0 or gravity is not None or masses is not None:
                 raise TypeError("`potential`, `gravity` and `masses` go with `points`; a "
                                 "`lagrangian` contains its potential")
+            if gravity_direction is not None or frame_rotation is not None:
+                raise TypeError("`gravity_direction` and `frame_rotation` go with `points`; a "
+                                "`lagrangian` contains its potential and its frame")
             self.points, self.masses = [], []
+            self.dimensions = 2
+            self.frame_rotation = None
             self.lagrangian = sp.expand(self._expr("lagrangian", lagrangian))
             self._require_quadratic()
             rest = self.lagrangian.xreplace({w: 0 for w in self.omega})
@@ -439,15 +495,78 @@ class MechanicalSystem:
         return expr
 
     def _point(self, index: int, point) -> tuple:
-        """Point ``index`` as an ``(x, y)`` pair of expressions."""
+        """Point ``index`` as an ``(x, y)`` pair or an ``(x, y, z)`` triple of expressions."""
         name = f"points[{index}]"
         if isinstance(point, (str, sp.Basic, numbers.Number)) or not hasattr(point, "__len__"):
-            raise TypeError(f"`{name}` must be an (x, y) pair of expressions, got {point!r}: "
-                            "write points=[(x0, y0), (x1, y1), ...], one pair per point")
-        if len(point) != 2:
-            raise ValueError(f"`{name}` must be an (x, y) pair (points move in a plane), got "
-                             f"{len(point)} entries")
+            raise TypeError(f"`{name}` must be an (x, y) pair or an (x, y, z) triple of "
+                            f"expressions, got {point!r}: write points=[(x0, y0), (x1, y1), "
+                            "...], one tuple per point")
+        if len(point) not in (2, 3):
+            raise ValueError(f"`{name}` must be an (x, y) pair (a point in a plane) or an "
+                             f"(x, y, z) triple (in space), got {len(point)} entries")
         return tuple(self._expr(name, c) for c in point)
+
+    def _constant_vector(self, name: str, value, what: str) -> list:
+        """``value`` as a list of :attr:`dimensions` expressions of the parameters only."""
+        size = self.dimensions
+        if isinstance(value, (str, sp.Basic, numbers.Number)) or not hasattr(value, "__len__"):
+            raise TypeError(f"`{name}` must be a sequence of {size} numbers ({what}), got "
+                            f"{value!r} ({type(value).__name__})")
+        if len(value) != size:
+            raise ValueError(f"`{name}` must hold {size} entries, one per axis of the points "
+                             f"({what}), got {len(value)}")
+        entries = []
+        for k, entry in enumerate(value):
+            if isinstance(entry, bool):
+                raise TypeError(f"`{name}[{k}]` must be a number, got {entry!r}")
+            if isinstance(entry, numbers.Number) and not (
+                    isinstance(entry, numbers.Real) and math.isfinite(float(entry))):
+                raise ValueError(f"`{name}[{k}]` must be a real finite number, got {entry!r}")
+            expr = self._expr(f"{name}[{k}]", entry)
+            if expr.free_symbols & (set(self.q) | set(self.omega) | {self.t}):
+                raise ValueError(f"`{name}[{k}]` = {expr} must be a number or an expression "
+                                 "of parameters: it does not change with the motion")
+            entries.append(expr)
+        return entries
+
+    def _gravity_direction(self, direction, gravity) -> list | None:
+        """The unit vector gravity pulls along, or None for straight down the last axis."""
+        if direction is None:
+            return None
+        if gravity is None:
+            raise TypeError("`gravity_direction` goes with `gravity` (its strength g); give "
+                            "both, or neither for a system without gravity")
+        entries = self._constant_vector("gravity_direction", direction,
+                                        "the direction gravity pulls the points")
+        if any(e.free_symbols for e in entries):
+            raise ValueError("`gravity_direction` must hold numbers (a fixed direction), got "
+                             f"{entries}")
+        length = sp.sqrt(sp.Add(*(e ** 2 for e in entries)))
+        if _vanishes(length):
+            raise ValueError(f"`gravity_direction` = {tuple(direction)} is zero: it has no "
+                             "direction; give the way gravity pulls, such as (0, 0, -1)")
+        return [e / length for e in entries]
+
+    def _frame_rotation(self, rotation) -> list | None:
+        """The angular velocity of the frame the points are written in, or None (inertial)."""
+        if rotation is None:
+            return None
+        if self.dimensions != 3:
+            raise ValueError("`frame_rotation` needs points in space, (x, y, z): a rotating "
+                             "frame turns about an axis; write a planar system's points with "
+                             "z = 0 to give one")
+        return self._constant_vector("frame_rotation", rotation,
+                                     "the angular velocity of the points' frame [rad/s]")
+
+    def _inertial_velocity(self, point) -> list:
+        """The velocity of ``point`` in an inertial frame: ``r' + w x r`` when the points are
+        written in a frame turning at ``w`` (:attr:`frame_rotation`), else ``r'``."""
+        rates = [self._rate(c) for c in point]
+        if self.frame_rotation is None:
+            return rates
+        (wx, wy, wz), (x, y, z) = self.frame_rotation, point
+        return [rates[0] + wy * z - wz * y, rates[1] + wz * x - wx * z,
+                rates[2] + wx * y - wy * x]
 
     def _mass(self, index: int, mass) -> sp.Expr:
         """Mass ``index``: a real, finite, non-negative number or expression of parameters."""
@@ -490,22 +609,25 @@ class MechanicalSystem:
         given ones (so that a pendulum whose pivot moves is drawn with its rod and pivot)."""
         moved = set(self.q)
 
-        def fixed_distance(dx, dy) -> bool:
-            if not (sp.sympify(dx).free_symbols | sp.sympify(dy).free_symbols) & moved:
+        def fixed_distance(*differences) -> bool:
+            if not set().union(*(sp.sympify(d).free_symbols for d in differences)) & moved:
                 return False  # nothing between them moves: not an arm
-            square = sp.trigsimp(sp.expand(dx ** 2 + dy ** 2))
+            square = sp.trigsimp(sp.expand(sum(d ** 2 for d in differences)))
             return square != 0 and not square.free_symbols & moved
 
         given = list(self.points)
-        for k, (x, y) in enumerate(given):
-            anchors = [(j, given[j]) for j in range(k)] + [(-1, (0, 0))]
-            hung = next((j for j, (ax, ay) in anchors if fixed_distance(x - ax, y - ay)), None)
+        origin = (0,) * self.dimensions
+        for k, point in enumerate(given):
+            anchors = [(j, given[j]) for j in range(k)] + [(-1, origin)]
+            hung = next((j for j, anchor in anchors
+                         if fixed_distance(*(c - a for c, a in zip(point, anchor)))), None)
             if hung is not None:
                 self.joints.append((hung, k))
                 continue
             pivot = tuple(sp.Add(*(term for term in sp.Add.make_args(sp.expand(c))
-                                   if not term.free_symbols & moved)) for c in (x, y))
-            if any(c != 0 for c in pivot) and fixed_distance(x - pivot[0], y - pivot[1]):
+                                   if not term.free_symbols & moved)) for c in point)
+            if any(c != 0 for c in pivot) and fixed_distance(
+                    *(c - a for c, a in zip(point, pivot))):
                 self.points.append(pivot)
                 self.masses.append(sp.Integer(0))
                 self.joints.append((len(self.points) - 1, k))
@@ -551,9 +673,28 @@ class MechanicalSystem:
 
         return mass
 
+    @functools.cached_property
+    def _position_function(self):
+        """The points' coordinates, flat, as a NumPy function of ``(q, t, parameters)``."""
+        return sp.lambdify((*self.q, self.t, *self.parameters),
+                           [c for point in self.points for c in point], modules="numpy",
+                           cse=True)
+
+    def _placed(self, q, t, params) -> bool:
+        """Whether the points have real, finite positions at ``(q, t)`` (True without points)."""
+        import numpy as np
+
+        if not self.points:
+            return True
+        with np.errstate(all="ignore"):
+            values = self._position_function(*q, t, *params)
+        return bool(all(np.all(np.isfinite(np.asarray(v, dtype=complex))) and
+                        np.all(np.imag(np.asarray(v, dtype=complex)) == 0) for v in values))
+
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        state.pop("_mass_function", None)  # a lambdified function: made again when used
+        for made in ("_mass_function", "_position_function"):
+            state.pop(made, None)  # a lambdified function: made again when used
         return state
 
     def _prove_positive(self) -> bool:
@@ -611,8 +752,11 @@ class MechanicalSystem:
         for point in points:
             with np.errstate(all="ignore"):
                 matrix = self._mass_function(point[:-1], point[-1], params)
-            if not np.all(np.isfinite(matrix)):
-                continue  # outside the coordinates' domain (log r at r < 0): not checked there
+                placed = self._placed(point[:-1], point[-1], params)
+            if not (np.all(np.isfinite(matrix)) and placed):
+                # outside the coordinates' domain (log r at r < 0; a height sqrt(l^2 - x^2 -
+                # y^2) of x^2 + y^2 > l^2, which the squared velocities no longer show)
+                continue
             values_, vectors = np.linalg.eigh(matrix)
             scale = max(abs(values_).max(), 1e-300)
             if values_[0] <= 1e-10 * scale:
@@ -824,7 +968,16 @@ class MechanicalSystem:
         """The equilibria SymPy's ``solve`` finds, each with its Jacobian.
 
         ``subs`` gives values to some parameters first (solving is then easier).
+
+        Points written in a turning frame (:attr:`frame_rotation`): SymPy's ``solve`` did not
+        finish in five minutes on the Foucault pendulum's equations (a square root, and
+        centrifugal terms some 1e-10 of gravity), so their equilibria are found numerically
+        instead, by Newton's method from the origin and from :data:`_NEWTON_STARTS` other
+        places and their mirror images, at the values ``subs`` gives every parameter; each is
+        then checked and linearised as :meth:`equilibrium_at` does.
         """
+        if self.frame_rotation is not None:
+            return self._equilibria_by_newton(subs)
         equations = self.equilibrium_equations()
         if subs:
             equations = equations.xreplace(dict(subs))
@@ -838,6 +991,53 @@ class MechanicalSystem:
             if sp.simplify(self.mass_matrix.xreplace(at).det()) == 0:
                 continue  # where the coordinates fail (r = 0 of polar coordinates)
             found.append(self.equilibrium_at(point, subs))
+        return found
+
+    def _equilibria_by_newton(self, subs) -> list[SystemEquilibrium]:
+        """The equilibria Newton's method finds from the origin and from random places
+        (see :meth:`equilibria`), every parameter given a value in ``subs``."""
+        import numpy as np
+
+        values = {s: v for s, v in dict(subs or {}).items() if s in self.parameters}
+        missing = [str(s) for s in self.parameters if s not in values]
+        if missing:
+            raise ValueError(f"the equilibria of {self.name} (points in a turning frame) are "
+                             f"found numerically: give every parameter a value in `subs`; "
+                             f"missing {missing}")
+        rest = {w: 0 for w in self.omega}
+        forcing = self.forcing.xreplace(rest).xreplace(values)
+        residual = sp.lambdify(list(self.q), list(forcing), modules="numpy", cse=True)
+        slope = sp.lambdify(list(self.q), forcing.jacobian(self.q), modules="numpy", cse=True)
+        rng = np.random.default_rng(20261207)
+        places = rng.uniform(-1, 1, (_NEWTON_STARTS, self.n))
+        starts = np.vstack([np.zeros(self.n), places, -places])  # mirrored: symmetric pairs
+        points = []
+        for q in starts:
+            with np.errstate(all="ignore"):
+                for _ in range(50):
+                    try:
+                        step = np.linalg.solve(np.array(slope(*q), dtype=float),
+                                               -np.array(residual(*q), dtype=float))
+                    except (np.linalg.LinAlgError, TypeError, ValueError):
+                        break
+                    q = q + step
+                    if not np.all(np.isfinite(q)) or np.max(np.abs(step)) < 1e-15 * (
+                            1 + np.max(np.abs(q))):
+                        break
+                value = np.array(residual(*q), dtype=complex)
+            if not (np.all(np.isfinite(value)) and np.max(np.abs(value)) < 1e-10
+                    and np.all(value.imag == 0)):
+                continue
+            if any(np.allclose(q, other, atol=1e-9) for other in points):
+                continue
+            points.append(q)
+        found = []
+        for q in points:
+            at = dict(zip(self.q, q)) | values
+            matrix = np.array(self.mass_matrix.xreplace(at).evalf(), dtype=complex)
+            if not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-12:
+                continue  # where the coordinates fail
+            found.append(self.equilibrium_at(tuple(float(c) for c in q), values))
         return found
 
     def equilibrium_at(self, point, subs: dict | None = None) -> SystemEquilibrium:

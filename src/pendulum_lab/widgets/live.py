@@ -451,6 +451,11 @@ def live_simulator(
     >>> sim.trajectory.theta[0].round(4).tolist(), sim.trajectory.omega[0].tolist()
     ([1.5708, 2.5], [0.0, 0.0])
     """
+    if getattr(model, "dimensions", 2) != 2:
+        raise ValueError(
+            f"{model.name} moves in space, and the live simulator draws a plane: use "
+            "pl.animation.simulator(model) or pl.animation.html_animation(run, model), which "
+            "draw it from above and from the side")
     return build_simulator(
         LiveSimulator, model, theta0, omega0, t_end=t_end, dt=dt, method=method, speed=speed,
         trail=trail,
