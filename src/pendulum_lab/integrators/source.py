@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import functools
 import inspect
+import textwrap
 
+from .composition import Composition
 from .registry import get_method
 from .tableau import ButcherTableau
 
@@ -26,12 +28,29 @@ def _code_names(code) -> list[str]:
     return names
 
 
-def _binding(name: str, step: functools.partial) -> str:
-    """A comment line saying which arguments a method's reference step has bound."""
-    bound = ", ".join(f"{key}=<the Butcher tableau of {name}, {value.stages} stages>"
-                      if isinstance(value, ButcherTableau) else f"{key}={value!r}"
-                      for key, value in step.keywords.items())
-    return f"# {name}: {step.func.__name__}(field, t, q, p, h, {bound})"
+def _shown(name: str, key: str, value) -> str:
+    """A bound argument as the header shows it."""
+    if isinstance(value, ButcherTableau):
+        return f"{key}=<the Butcher tableau of {name}, {value.stages} stages>"
+    if isinstance(value, Composition):
+        return f"{key}=<the {value.stages} substeps of {name}, below>"
+    return f"{key}={value!r}"
+
+
+def _binding(name: str, step: functools.partial) -> list[str]:
+    """Comment lines saying which arguments a method's reference step has bound.
+
+    A composition's substeps follow, one a line, with their source: they are the method.
+    """
+    bound = ", ".join(_shown(name, key, value) for key, value in step.keywords.items())
+    lines = [f"# {name}: {step.func.__name__}(field, t, q, p, h, {bound})"]
+    for value in step.keywords.values():
+        if isinstance(value, Composition):
+            lines += [f"#   {line}" for line in value.describe()]
+            if value.source:
+                lines += textwrap.wrap(f"weights from {value.source}", 88,
+                                       initial_indent="#   ", subsequent_indent="#   ")
+    return lines
 
 
 def method_source(method, helpers: bool = False) -> str:
@@ -76,7 +95,7 @@ def method_source(method, helpers: bool = False) -> str:
         raise ValueError(f"`method` {chosen.name!r} has no reference step to show")
     header = []
     if isinstance(step, functools.partial):
-        header, step = [_binding(chosen.name, step)], step.func
+        header, step = _binding(chosen.name, step), step.func
     found, queue = [step], [step]
     while queue:
         function = queue.pop(0)
