@@ -121,11 +121,14 @@ class Composition:
             raise ValueError("the composition is declared symmetric, but its substeps read "
                              "backwards (adjoints swapped) are another sequence")
         found = self.conditions_order(self.order + 1)
-        if found != self.order:
+        if found < self.order:
             raise ValueError(f"the composition is declared of order {self.order}, but its "
-                             f"weights give order {found} (the order conditions of "
-                             f"order {min(found + 1, self.order)} "
-                             f"{'fail' if found < self.order else 'hold too'})")
+                             f"weights give order {found} (the order conditions of order "
+                             f"{found + 1} fail)")
+        if found > self.order:
+            raise ValueError(f"the composition is declared of order {self.order}, but its "
+                             f"weights give order at least {found} (the order conditions of "
+                             f"order {found} hold too)")
 
     @property
     def stages(self) -> int:

@@ -12,7 +12,7 @@ import functools
 import inspect
 import textwrap
 
-from .composition import Composition
+from .composition import SUBSTEP_NAMES, Composition
 from .registry import get_method
 from .tableau import ButcherTableau
 
@@ -77,7 +77,8 @@ def method_source(method, helpers: bool = False) -> str:
     -------
     str
         The step's source, preceded by a comment line naming the bound arguments when the
-        step is a general one bound to the method's data (a Runge-Kutta method's tableau).
+        step is a general one bound to the method's data (a Runge-Kutta method's tableau;
+        a composition's substeps, one a line, and where its weights come from).
 
     Examples
     --------
@@ -93,16 +94,19 @@ def method_source(method, helpers: bool = False) -> str:
     step = chosen.reference
     if step is None:
         raise ValueError(f"`method` {chosen.name!r} has no reference step to show")
-    header = []
+    header, unused = [], set()
     if isinstance(step, functools.partial):
         header, step = _binding(chosen.name, step), step.func
+        if chosen.composition is not None:  # the base maps this composition does not take
+            used = {SUBSTEP_NAMES[kind] for kind, _ in chosen.composition.substeps}
+            unused = set(SUBSTEP_NAMES.values()) - used
     found, queue = [step], [step]
     while queue:
         function = queue.pop(0)
         for name in _code_names(function.__code__):
             candidate = function.__globals__.get(name)
             if (inspect.isfunction(candidate) and candidate.__module__ == step.__module__
-                    and candidate not in found):
+                    and candidate not in found and name not in unused):
                 found.append(candidate)
                 queue.append(candidate)
     shown = found if helpers else found[:1]
