@@ -187,3 +187,14 @@ def test_an_implicit_tableau_with_more_stages_than_the_stack_buffer_is_refused()
         Method.from_tableau("too_many", averaging(MAX_STAGE_LANES + 1), "too many stages")
     # negative control: the largest allowed number is taken
     assert Method.from_tableau("as_many", averaging(MAX_STAGE_LANES), "as many").implicit
+
+
+def test_symmetry_is_derived_from_the_coefficients():
+    """``b`` reversed equals ``b`` and ``a_(s+1-i, s+1-j) + a_ij = b_j`` [HLW, Thm V.2.3]."""
+    assert gauss_legendre_tableau(2).symmetric and gauss_legendre_tableau(3).symmetric
+    trapezoidal = ButcherTableau(a=[[0, 0], [0.5, 0.5]], b=[0.5, 0.5])
+    assert trapezoidal.symmetric
+    # negative controls: explicit methods are never symmetric, RK4 among them
+    assert not ButcherTableau(a=[[0.0]], b=[1.0]).symmetric
+    assert not ButcherTableau(a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]],
+                              b=[1 / 6, 1 / 3, 1 / 3, 1 / 6]).symmetric

@@ -1,7 +1,8 @@
 """The integrators layer: one-step maps of vector fields, compiled with Numba.
 
 Modules, in the order they build on each other: ``tableau`` (Butcher tableaus and their
-conditions), ``field`` (what a method sees of a system), ``step`` (how a step is declared),
+conditions), ``composition`` (composition methods' weights and their conditions), ``field``
+(what a method sees of a system), ``step`` (how a step is declared),
 ``stopping`` (the stopping rule of every implicit solve), one module per family of methods
 (``runge_kutta``, ``symplectic``, ``velocity``, ``variational``), ``reference`` (every method
 again as a plain NumPy reference step that reads like its formula), ``method`` and ``registry``
@@ -40,7 +41,13 @@ explicit tableaus are stepped by :func:`~pendulum_lab.integrators.runge_kutta.ex
 implicit ones by :func:`~pendulum_lab.integrators.runge_kutta.implicit_rk` (fixed-point
 iteration), which evaluates all stages in one call of the field's third kernel, ``stages``,
 received in place of ``acceleration`` (:func:`~pendulum_lab.integrators.registry.step_kernels`).
-Stage ``i`` is evaluated at time ``t + c_i h``. The symplectic partitioned methods follow the
+Stage ``i`` is evaluated at time ``t + c_i h``. A composition method (Yoshida, Suzuki,
+McLachlan, Omelyan) is one entry made from its weights and base method by
+:meth:`~pendulum_lab.integrators.method.Method.from_composition`
+(:mod:`~pendulum_lab.integrators.composition` checks them), stepped by
+:func:`~pendulum_lab.integrators.symplectic.composition_step`: leapfrog steps, or symplectic
+Euler and its adjoint in turn, each from the time where the last ended. The symplectic
+partitioned methods follow the
 textbook formulas line by line, with the time attached to the positions (extended phase space:
 the first kick at ``t``, the last at ``t + h``); the conformal methods compose them with the
 exact flow of linear damping. All implicit equations are iterated to round-off with one stopping

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
+from . import reference as references
+from .composition import Composition
 from .reference import runge_kutta_reference
 from .runge_kutta import tableau_step
+from .symplectic import composition_step
 from .tableau import ButcherTableau
 
 __all__ = ["ANY_FIELD", "CONFORMAL_FIELD", "HAMILTONIAN_FIELD", "LAGRANGIAN_FIELD", "Method"]
@@ -19,8 +23,9 @@ LAGRANGIAN_FIELD = "lagrangian"
 class Method:
     """An integrator: its properties and its compiled one-step map.
 
-    Build a Runge-Kutta method with :meth:`from_tableau`, which derives every
-    property from the tableau.
+    Build a Runge-Kutta method with :meth:`from_tableau` and a composition method with
+    :meth:`from_composition`: each derives every property from its data. The tests take
+    their lists of methods from these properties (``tests/integrators/test_integrators.py``).
 
     Attributes
     ----------
@@ -45,8 +50,12 @@ class Method:
         zero); conformal ones (``damping_rate`` finite, zero included);
         those with a discrete Lagrangian (no damping, no drive, no time in L:
         an unforced chain, the elastic or the cart pendulum).
+    symmetric : bool
+        ``Phi_{-h}(Phi_h(y)) = y``: time-reversible, with even order.
     tableau : ButcherTableau or None
         The Butcher tableau of a Runge-Kutta method.
+    composition : Composition or None
+        The weights and base method of a composition method.
     rule, solver : str or None
         For a variational method (:func:`variational_method`): the discrete
         Lagrangian's quadrature rule and how its step solves for ``q1``.
@@ -65,7 +74,9 @@ class Method:
     summary: str
     kernel: object = field(repr=False)
     applies_to: str = ANY_FIELD
+    symmetric: bool = False
     tableau: ButcherTableau | None = field(default=None, repr=False)
+    composition: Composition | None = field(default=None, repr=False)
     rule: str | None = None
     solver: str | None = None
     reference: object = field(default=None, repr=False)
@@ -84,8 +95,27 @@ class Method:
         """
         return cls(name, tableau.order, tableau.symplectic_condition().holds,
                    not tableau.explicit, "canonical", summary, tableau_step(tableau, name),
-                   tableau=tableau,
+                   symmetric=tableau.symmetric, tableau=tableau,
                    reference=runge_kutta_reference(tableau) if reference is None else reference)
+
+    @classmethod
+    def from_composition(cls, name: str, composition: Composition, summary: str) -> Method:
+        """The composition method of ``composition`` on ``(q, p)``; nothing typed but the name.
+
+        Order and symmetry are the composition's (checked when it was made); it is symplectic
+        because its base methods are, implicit as they are (for a non-separable ``H``), and
+        for Hamiltonian fields as they are. The step is
+        :func:`~pendulum_lab.integrators.symplectic.composition_step`, the reference step
+        :func:`~pendulum_lab.integrators.reference.composition`.
+        """
+        if not isinstance(composition, Composition):
+            raise TypeError(f"`composition` must be a Composition, got "
+                            f"{type(composition).__name__}")
+        return cls(name, composition.order, True, True, "canonical", summary,
+                   composition_step(composition, name), applies_to=HAMILTONIAN_FIELD,
+                   symmetric=composition.symmetric, composition=composition,
+                   reference=functools.partial(references.composition,
+                                               composition=composition))
 
     def __str__(self) -> str:
         return self.name

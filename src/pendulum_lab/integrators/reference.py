@@ -39,12 +39,15 @@ import math
 
 import numpy as np
 
+from . import composition as compositions
 from .field import ConvergenceError, HamiltonianField
 from .stopping import EPSILON, MAX_SWEEPS, ROUNDOFF_TOLERANCE
 from .tableau import ButcherTableau
 
 __all__ = [
     "ReferenceField",
+    "adjoint_symplectic_euler",
+    "composition",
     "conformal_euler",
     "conformal_leapfrog",
     "explicit_euler",
@@ -248,6 +251,31 @@ def leapfrog(field, t, q, p, h):
         return q + h / 2 * velocity + h / 2 * field.H_p(t + h, x, p_half)
     q1 = fixed_point(drift, q + h * velocity)
     return q1, p_half - h / 2 * field.H_q(t + h, q1, p_half)
+
+
+def adjoint_symplectic_euler(field, t, q, p, h):
+    """The adjoint of symplectic Euler for a general ``H(t, q, p)`` [HLW, Sect. II.3], the drift
+    first, iterated from the explicit guess (exact for a separable H):
+
+    ``q1 = q + h H_p(t + h, q1, p)``   (implicit in q1)
+    ``p1 = p - h H_q(t + h, q1, p)``
+    """
+    def drift(x):
+        return q + h * field.H_p(t + h, x, p)
+    q1 = fixed_point(drift, q + h * field.H_p(t, q, p))
+    return q1, p - h * field.H_q(t + h, q1, p)
+
+
+def composition(field, t, q, p, h, composition):
+    """A composition method [HLW, Sect. II.4]: its substeps one after another, the ``i``-th the
+    base method (leapfrog, symplectic Euler or its adjoint) with the step ``w_i h``, each from
+    the time and state where the last ended."""
+    base = {"leapfrog": leapfrog, "symplectic_euler": symplectic_euler,
+            "adjoint_symplectic_euler": adjoint_symplectic_euler}
+    for kind, w in composition.substeps:
+        q, p = base[compositions.SUBSTEP_NAMES[kind]](field, t, q, p, w * h)
+        t = t + w * h
+    return q, p
 
 
 def conformal_euler(field, t, q, p, h):

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import reference
+from .composition import Composition
 from .field import HamiltonianField
 from .method import ANY_FIELD, CONFORMAL_FIELD, HAMILTONIAN_FIELD, LAGRANGIAN_FIELD, Method
 from .symplectic import (
@@ -37,6 +38,20 @@ __all__ = [
 ]
 
 
+# Weights of the composition methods below, from their closed forms where they have one.
+_TRIPLE_JUMP = 1 / (2 - 2 ** (1 / 3))
+#: Yoshida's w0 (from the sum), w1, w2, w3: the sequence is w3 w2 w1 w0 w1 w2 w3.
+_YOSHIDA6_PUBLISHED = (-1.17767998417887, 0.235573213359357, 0.784513610477560)
+_YOSHIDA6 = (1 - 2 * sum(_YOSHIDA6_PUBLISHED), *_YOSHIDA6_PUBLISHED)
+_SUZUKI = 1 / (4 - 4 ** (1 / 3))
+_MCLACHLAN4 = ((14 - 19 ** 0.5) / 108, (146 + 5 * 19 ** 0.5) / 540, (-23 - 20 * 19 ** 0.5) / 270,
+               (-2 + 10 * 19 ** 0.5) / 135, 1 / 5)
+# Omelyan, Mryglod, Folk's PEFRL: drift xi, kick (1 - 2 lambda)/2, drift chi, kick lambda,
+# drift 1 - 2 (chi + xi), then the same backwards; as adjoint, Euler, adjoint, ... substeps
+# (each drift and kick is the sum of the two substeps that meet there).
+_XI, _LAMBDA, _CHI = 0.1786178958448091, -0.2123418310626054, -0.06626458266981849
+_OMELYAN4 = (_XI, 0.5 - _LAMBDA - _XI, _LAMBDA + _XI + _CHI - 0.5, 0.5 - _CHI - _XI)
+
 _REGISTRY = [
     # Its reference step is the formula itself, not the one-stage stage loop.
     Method.from_tableau("explicit_euler", ButcherTableau(a=[[0.0]], b=[1.0]),
@@ -47,7 +62,7 @@ _REGISTRY = [
            reference=reference.symplectic_euler),
     Method("leapfrog", 2, True, True, "canonical",
            "Stormer-Verlet in (theta, p): the generalized, implicit form", leapfrog_step,
-           applies_to=HAMILTONIAN_FIELD, reference=reference.leapfrog),
+           applies_to=HAMILTONIAN_FIELD, symmetric=True, reference=reference.leapfrog),
     Method.from_tableau("rk4", ButcherTableau(a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0],
                                                  [0, 0, 1, 0]], b=[1 / 6, 1 / 3, 1 / 3, 1 / 6]),
                         "classical fourth-order Runge-Kutta"),
@@ -80,7 +95,7 @@ _REGISTRY = [
            conformal_euler_step, applies_to=CONFORMAL_FIELD, reference=reference.conformal_euler),
     Method("conformal_leapfrog", 2, True, True, "canonical",
            "conformal Stormer-Verlet: exact damping for h/2, leapfrog, damping for h/2",
-           conformal_leapfrog_step, applies_to=CONFORMAL_FIELD,
+           conformal_leapfrog_step, applies_to=CONFORMAL_FIELD, symmetric=True,
            reference=reference.conformal_leapfrog),
     # Fixed-point iteration, as for Gauss-Legendre. Newton's method with the
     # generated Jacobian needs half the iterations and is faster per step
@@ -90,6 +105,37 @@ _REGISTRY = [
     # (tests/integrators/test_variational.py): no result is silently wrong.
     variational_method("midpoint", "fixed_point"),
     variational_method("trapezoid", "fixed_point"),
+    # Composition methods: weights applied to the leapfrog, or to symplectic Euler and its
+    # adjoint in turn; each checks its order and symmetry when it is made (composition.py).
+    Method.from_composition("yoshida4", Composition(
+        [_TRIPLE_JUMP, 1 - 2 * _TRIPLE_JUMP, _TRIPLE_JUMP], order=4,
+        source="H. Yoshida, Phys. Lett. A 150 (1990) 262-268: the triple jump, "
+               "w1 = 1 / (2 - 2^(1/3))"),
+        "Yoshida's triple jump: three leapfrog steps, the middle one backwards (order 4)"),
+    Method.from_composition("yoshida6", Composition(
+        [*_YOSHIDA6[:0:-1], _YOSHIDA6[0], *_YOSHIDA6[1:]], order=6,
+        source="H. Yoshida, Phys. Lett. A 150 (1990) 262-268, Table 1, solution A (15 digits; "
+               "w0 = 1 - 2 (w1 + w2 + w3))"),
+        "Yoshida's sixth-order composition: seven leapfrog steps (his solution A)"),
+    Method.from_composition("suzuki4", Composition(
+        [_SUZUKI, _SUZUKI, 1 - 4 * _SUZUKI, _SUZUKI, _SUZUKI], order=4,
+        source="M. Suzuki, Phys. Lett. A 146 (1990) 319-323: the fractal decomposition, "
+               "p = 1 / (4 - 4^(1/3))"),
+        "Suzuki's fractal composition: five leapfrog steps, the middle one backwards "
+        "(order 4)"),
+    Method.from_composition("mclachlan4", Composition(
+        [*_MCLACHLAN4, *_MCLACHLAN4[::-1]], order=4, base="symplectic_euler",
+        source="R. I. McLachlan, SIAM J. Sci. Comput. 16 (1995) 151-168: the five-stage "
+               "symmetric method of order 4 with the least error, in closed form"),
+        "McLachlan's optimised order-4 composition of symplectic Euler and its adjoint "
+        "(ten substeps)"),
+    Method.from_composition("omelyan4", Composition(
+        [*_OMELYAN4, *_OMELYAN4[::-1]], order=4, base="symplectic_euler", adjoint_first=True,
+        source="I. P. Omelyan, I. M. Mryglod, R. Folk, Comput. Phys. Commun. 146 (2002) "
+               "188-202: the position extended Forest-Ruth-like scheme (PEFRL), its xi, "
+               "lambda, chi to the 16 digits published there"),
+        "Omelyan-Mryglod-Folk's optimised order-4 splitting (PEFRL): drifts and kicks as "
+        "symplectic Euler and its adjoint"),
 ]
 #: The methods for Hamiltonian systems, compared throughout the course.
 METHODS: dict[str, Method] = {

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import functools
 import inspect
+import textwrap
 
+from .composition import SUBSTEP_NAMES, Composition
 from .registry import get_method
 from .tableau import ButcherTableau
 
@@ -26,12 +28,29 @@ def _code_names(code) -> list[str]:
     return names
 
 
-def _binding(name: str, step: functools.partial) -> str:
-    """A comment line saying which arguments a method's reference step has bound."""
-    bound = ", ".join(f"{key}=<the Butcher tableau of {name}, {value.stages} stages>"
-                      if isinstance(value, ButcherTableau) else f"{key}={value!r}"
-                      for key, value in step.keywords.items())
-    return f"# {name}: {step.func.__name__}(field, t, q, p, h, {bound})"
+def _shown(name: str, key: str, value) -> str:
+    """A bound argument as the header shows it."""
+    if isinstance(value, ButcherTableau):
+        return f"{key}=<the Butcher tableau of {name}, {value.stages} stages>"
+    if isinstance(value, Composition):
+        return f"{key}=<the {value.stages} substeps of {name}, below>"
+    return f"{key}={value!r}"
+
+
+def _binding(name: str, step: functools.partial) -> list[str]:
+    """Comment lines saying which arguments a method's reference step has bound.
+
+    A composition's substeps follow, one a line, with their source: they are the method.
+    """
+    bound = ", ".join(_shown(name, key, value) for key, value in step.keywords.items())
+    lines = [f"# {name}: {step.func.__name__}(field, t, q, p, h, {bound})"]
+    for value in step.keywords.values():
+        if isinstance(value, Composition):
+            lines += [f"#   {line}" for line in value.describe()]
+            if value.source:
+                lines += textwrap.wrap(f"weights from {value.source}", 88,
+                                       initial_indent="#   ", subsequent_indent="#   ")
+    return lines
 
 
 def method_source(method, helpers: bool = False) -> str:
@@ -58,7 +77,8 @@ def method_source(method, helpers: bool = False) -> str:
     -------
     str
         The step's source, preceded by a comment line naming the bound arguments when the
-        step is a general one bound to the method's data (a Runge-Kutta method's tableau).
+        step is a general one bound to the method's data (a Runge-Kutta method's tableau;
+        a composition's substeps, one a line, and where its weights come from).
 
     Examples
     --------
@@ -74,16 +94,19 @@ def method_source(method, helpers: bool = False) -> str:
     step = chosen.reference
     if step is None:
         raise ValueError(f"`method` {chosen.name!r} has no reference step to show")
-    header = []
+    header, unused = [], set()
     if isinstance(step, functools.partial):
-        header, step = [_binding(chosen.name, step)], step.func
+        header, step = _binding(chosen.name, step), step.func
+        if chosen.composition is not None:  # the base maps this composition does not take
+            used = {SUBSTEP_NAMES[kind] for kind, _ in chosen.composition.substeps}
+            unused = set(SUBSTEP_NAMES.values()) - used
     found, queue = [step], [step]
     while queue:
         function = queue.pop(0)
         for name in _code_names(function.__code__):
             candidate = function.__globals__.get(name)
             if (inspect.isfunction(candidate) and candidate.__module__ == step.__module__
-                    and candidate not in found):
+                    and candidate not in found and name not in unused):
                 found.append(candidate)
                 queue.append(candidate)
     shown = found if helpers else found[:1]

@@ -24,11 +24,15 @@ import numpy as np
 
 from ..codegen.cache import cached_njit
 from ..codegen.lowlevel import span, vector
-from .step import jit_step, kernel_function
+from .composition import EULER, LEAPFROG, Composition
+from .step import Step, jit_step, kernel_function
 from .stopping import MAX_SWEEPS, fixed_point_status
 
 __all__ = [
     "add_scaled",
+    "adjoint_symplectic_euler",
+    "composed",
+    "composition_step",
     "conformal_euler_step",
     "conformal_leapfrog_step",
     "implicit_kick",
@@ -111,6 +115,43 @@ def symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate, work
     hamilton(t, q, p1, params, dq, dp)  # only dq = H_p is used
     add_scaled(q1, q, h, dq)  # q1 = q + h dq
     return q1, p1, sweeps, sweeps + 2
+
+
+@kernel_function
+def adjoint_symplectic_euler(hamilton, t, q, p, h, params, separable, damping_rate, work):
+    """The adjoint of symplectic Euler for a general ``H(t, q, p)``, the drift first:
+
+    ``q1 = q + h H_p(t + h, q1, p)``   (implicit in ``q1`` only)
+    ``p1 = p - h H_q(t + h, q1, p)``
+
+    Symplectic Euler for ``h/2`` followed by this for ``h/2`` is :func:`stormer_verlet`; the
+    compositions of the two (:mod:`~pendulum_lab.integrators.composition`) include the
+    splitting methods. The drift starts from ``q + h H_p(t, q, p)``, exact when ``H`` is
+    separable. ``work`` holds ``6 n`` floats; ``q1, p1`` are returned as views into it.
+    """
+    n = q.size
+    dq, dp, q1 = vector(work, 0, n), vector(work, 1, n), vector(work, 2, n)
+    p1, new, smallest = vector(work, 3, n), vector(work, 4, n), vector(work, 5, n)
+    hamilton(t, q, p, params, dq, dp)  # only dq = H_p is used
+    add_scaled(q1, q, h, dq)
+    sweeps, calls = 0, 1
+    if not separable:
+        smallest[:] = np.inf
+        status = 0
+        while status == 0 and sweeps < MAX_SWEEPS:
+            sweeps += 1
+            hamilton(t + h, q1, p, params, dq, dp)
+            add_scaled(new, q, h, dq)  # q1 <- q + h dq(t + h, q1, p)
+            status = fixed_point_status(new, q1, smallest)
+            q1[:] = new
+        calls += sweeps
+        if status != 1:
+            return q, p, -1, calls
+    hamilton(t + h, q1, p, params, dq, dp)
+    if damping_rate != 0.0:
+        remove_damping(p, damping_rate, dp)
+    add_scaled(p1, p, h, dp)  # p1 = p + h dp
+    return q1, p1, sweeps, calls + 1
 
 
 @kernel_function
@@ -206,3 +247,66 @@ def conformal_leapfrog_step(hamilton, acceleration, t, q, p, h, params, separabl
     for i in range(n):
         p1[i] = contraction * p1[i]
     return q1, p1, sweeps, calls
+
+
+#: Floats of workspace per coordinate that a substep of a composition may use (the leapfrog's).
+SUBSTEP_MEMORY = 8
+
+
+@kernel_function
+def composed(hamilton, t, q, p, h, params, separable, damping_rate, kinds, weights, work):
+    """The composition of the substeps ``kinds`` with steps ``weights * h``, one after another.
+
+    ``kinds[i]`` says which map the ``i``-th substep is (``composition.LEAPFROG``, ``EULER``,
+    ``ADJOINT``); each starts at the time and state where the last ended. Substeps write into
+    two workspaces in turn, so that a substep never overwrites the state it starts from;
+    ``work`` holds ``(2 SUBSTEP_MEMORY + 2) n`` floats; ``q1, p1`` are returned as views into it.
+    """
+    n = q.size
+    size = SUBSTEP_MEMORY * n
+    qi, pi = vector(work, 2 * SUBSTEP_MEMORY, n), vector(work, 2 * SUBSTEP_MEMORY + 1, n)
+    qi[:] = q
+    pi[:] = p
+    time, sweeps, calls = t, 0, 0
+    for i in range(kinds.size):
+        substep_work = span(work, (i % 2) * size, size)
+        k = weights[i] * h
+        if kinds[i] == LEAPFROG:
+            q1, p1, substep_sweeps, substep_calls = stormer_verlet(
+                hamilton, time, qi, pi, k, params, separable, damping_rate, substep_work)
+        elif kinds[i] == EULER:
+            q1, p1, substep_sweeps, substep_calls = symplectic_euler(
+                hamilton, time, qi, pi, k, params, separable, damping_rate, substep_work)
+        else:
+            q1, p1, substep_sweeps, substep_calls = adjoint_symplectic_euler(
+                hamilton, time, qi, pi, k, params, separable, damping_rate, substep_work)
+        calls += substep_calls
+        if substep_sweeps < 0:
+            return q, p, -1, calls
+        sweeps += substep_sweeps
+        qi, pi = q1, p1
+        time += k
+    return qi, pi, sweeps, calls
+
+
+def composition_step(composition: Composition, name: str) -> Step:
+    """The step function of the composition method ``name``: :func:`composed` of its substeps.
+
+    The kinds and weights are closed over, so Numba compiles them in as constants, as
+    :func:`~pendulum_lab.integrators.runge_kutta.tableau_step` does with a tableau. Each
+    method's step is named ``<name>_step``.
+    """
+    if not isinstance(composition, Composition):
+        raise TypeError(f"`composition` must be a Composition, got {type(composition).__name__}")
+    kinds = np.array([kind for kind, _ in composition.substeps], dtype=np.int64)
+    weights = np.array(composition.weights)
+
+    def composition_of_substeps(hamilton, acceleration, t, q, p, h, params, separable,
+                                damping_rate, memory):
+        """One step of a composition method: its substeps one after another."""
+        return composed(hamilton, t, q, p, h, params, separable, damping_rate, kinds, weights,
+                        memory)
+
+    step = composition_of_substeps
+    step.__name__ = step.__qualname__ = f"{name}_step"
+    return jit_step(step, memory=lambda n: (2 * SUBSTEP_MEMORY + 2) * n)

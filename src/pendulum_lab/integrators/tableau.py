@@ -300,6 +300,17 @@ class ButcherTableau:
         return extrapolation
 
     @property
+    def symmetric(self) -> bool:
+        """``b_(s+1-j) = b_j`` and ``a_(s+1-i, s+1-j) + a_ij = b_j``: the method is its own adjoint.
+
+        Then it is time-reversible and of even order [HLW, Thm V.2.3]. The Gauss methods are,
+        explicit methods are not.
+        """
+        flipped = self.a[::-1, ::-1]
+        return bool(np.all(np.abs(self.b[::-1] - self.b) <= TOLERANCE)
+                    and np.all(np.abs(flipped + self.a - self.b[None, :]) <= TOLERANCE))
+
+    @property
     def is_collocation(self) -> bool:
         """Distinct nodes and ``C(s)``: the method is collocation at the nodes ``c``."""
         distinct = np.unique(self.c).size == self.stages

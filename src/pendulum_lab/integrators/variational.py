@@ -73,6 +73,6 @@ def variational_method(rule: str, solver: str, name: str | None = None) -> Metho
     return Method(name or f"variational_{rule}", 2, True, True, "canonical",
                   f"variational integrator of the {rule} rule ({quadrature}): symmetric, "
                   "symplectic in (theta, p)", variational_step, applies_to=LAGRANGIAN_FIELD,
-                  rule=rule, solver=solver,
+                  symmetric=True, rule=rule, solver=solver,
                   reference=functools.partial(variational, rule=rule,
                                               solver=VARIATIONAL_SOLVERS[solver]))
