@@ -1,0 +1,219 @@
+"""The kernel-free simulator's mathematics in Chromium: generated models and methods against
+the kernel.
+
+The ES modules of ``pendulum_lab/widgets/static/browser`` (the models' equations printed by
+``pendulum_lab.codegen.browser``, the methods written after ``integrators.reference``) are
+imported into a Chromium page served from the package's own folder, and compared with the
+Python package:
+
+* the generated field, momenta, energies and positions against the model's Python functions
+  at random states;
+* one browser step of every shipped model and method against ``pl.step`` (the compiled step);
+* the energy error of a 20 s run of the browser's engine against ``pl.simulate``'s, to one
+  pixel of the simulator's energy-error trace;
+* negative controls: a wrong sign in one generated term, a wrong weight in a method.
+
+Tolerances (derived, stated in ``field_tolerance`` and ``step_tolerance``): two evaluations of
+one expression in a different order of at most ``N`` rounded operations differ by at most
+``N eps M``, ``M`` bounding the magnitudes met (here ``1 +`` the largest input or output). A
+step adds ``h`` times a weighted mean of ``s`` field values (weights summing to one, the
+implicit ones solved to round-off, where the two stopping points differ by a few ulps), so
+it differs by at most ``8 eps (1 + |y|) + s |h| N eps M``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+from browser_engine import FIELD, RUN, STEPS, engine_page, shipped_model_url, shipped_models
+
+import pendulum_lab as pl
+from pendulum_lab.integrators.registry import MAIN_METHODS
+
+pytestmark = pytest.mark.browser
+
+EPS = np.finfo(float).eps
+MODELS = shipped_models()
+#: The simulator's energy-error trace spans +-error_max over (304 - 150) / 2 = 77 pixels
+#: (``drawError`` in simulator.js): "plotting precision" is one of them.
+TRACE_HALF_HEIGHT_PX = 77
+#: Field evaluations per step (stages; the symplectic methods evaluate twice per update).
+EVALUATIONS = {"explicit_euler": 1, "semi_implicit_euler": 2, "leapfrog": 4, "rk4": 4, "glrk4": 2}
+H = 0.01
+
+
+@pytest.fixture(scope="module")
+def page(tmp_path_factory):
+    with engine_page(tmp=tmp_path_factory.mktemp("chromium")) as opened:
+        yield opened
+
+
+def operations(model) -> int:
+    """``N``: the arithmetic operations in the printed expressions of the field."""
+    system = model.chain
+    exprs = [*system.mass_matrix, *system.dlagrangian_dq, *system.generalized_forces,
+             *system.momentum_offset, system.kinetic, system.potential]
+    return int(sp.count_ops(exprs))
+
+
+def field_tolerance(model, *values) -> float:
+    size = max(float(np.max(np.abs(np.concatenate([np.ravel(v) for v in values])))), 0.0)
+    return operations(model) * EPS * (1.0 + size)
+
+
+def step_tolerance(model, method, y, f) -> float:
+    y, f = np.abs(y).max(), np.abs(f).max()
+    return 8 * EPS * (1 + y) + EVALUATIONS[method] * H * field_tolerance(model, [y], [f])
+
+
+def random_states(model, count=6, seed=7):
+    """``[t, q, p, omega]`` at random: angles in (-2, 2), a spring's length near its rest."""
+    rng = np.random.default_rng(seed)
+    n = model.n
+    if model.is_chain:
+        qs = rng.uniform(-2, 2, (count, n))
+    else:
+        qs = np.column_stack([rng.uniform(0.7, 1.5, count), rng.uniform(-1, 1, count)])
+    ws = rng.uniform(-2, 2, (count, n))
+    ts = rng.uniform(0, 10, count)
+    ps = np.array([model.momenta(q, w, t) for q, w, t in zip(qs, ws, ts)])
+    return [[float(t), q.tolist(), p.tolist(), w.tolist()] for t, q, p, w in zip(ts, qs, ps, ws)]
+
+
+def params_of(model) -> list[float]:
+    return [float(v) for v in model.parameter_values.values()]
+
+
+def field_misfit(page_, model, module) -> float:
+    """The largest ratio of a generated function's difference from Python's to its tolerance."""
+    page, base, _ = page_
+    states = random_states(model)
+    out = page.evaluate(FIELD, dict(model=module, methods=f"{base}/browser/methods/index.js",
+                                    params=params_of(model), states=states))
+    worst = 0.0
+    for (t, q, p, w), (dq, dp, momenta, energies, places) in zip(states, out):
+        q, p, w = map(np.array, (q, p, w))
+        rates = model.vector_field(q, p, t)
+        expected = [*rates, p, [model.kinetic_energy(q, w, t), model.potential_energy(q, t)],
+                    np.ravel(np.column_stack(model.positions(q, t)))]
+        for got, want in zip((dq, dp, momenta, energies, places), expected):
+            tolerance = field_tolerance(model, q, p, w, want)
+            worst = max(worst, np.max(np.abs(np.array(got) - np.asarray(want))) / tolerance)
+    return worst
+
+
+def step_misfit(page_, model, module, method, tableau=None) -> float:
+    """The largest ratio of a browser step's difference from ``pl.step``'s to its tolerance."""
+    page, base, _ = page_
+    states = [s[:3] for s in random_states(model, count=4, seed=11)]
+    steps = page.evaluate(STEPS, dict(model=module, methods=f"{base}/browser/methods/index.js",
+                                      method=method, params=params_of(model), states=states,
+                                      h=H, tableau=tableau))
+    worst = 0.0
+    for (t, q, p), (q1, p1) in zip(states, steps):
+        want = pl.step(model, np.array(q), p0=np.array(p), dt=H, method=method, t0=t)
+        y = np.concatenate([q, p])
+        f = np.concatenate(model.vector_field(np.array(q), np.array(p), t))
+        difference = np.max(np.abs(np.concatenate([q1, p1]) - np.concatenate(want)))
+        worst = max(worst, difference / step_tolerance(model, method, y, f))
+    return worst
+
+
+def start_of(model) -> list[float]:
+    """A start in the regular part of phase space: round-off does not grow into the trace
+    within 20 s (a chaotic start would separate the two runs by itself)."""
+    return [0.5, 0.3, 0.1][: model.n] if model.is_chain else list(model.start)
+
+
+def energy_error_misfit(page_, model, module, method, tableau=None) -> tuple[float, float]:
+    """The browser's 20 s energy error against the kernel's: (largest difference, one pixel)."""
+    page, base, _ = page_
+    start = start_of(model)
+    run = page.evaluate(RUN, dict(engine=f"{base}/browser/engine.js", model=module,
+                                  params=params_of(model), method=method, theta0=start,
+                                  omega0=[0.0] * model.n, tEnd=20.0, dt=0.01, tableau=tableau))
+    kernel = pl.simulate(model, start, np.zeros(model.n), t_end=20.0, dt=0.01, method=method)
+    energy = np.array(run["energy"])
+    assert len(energy) == len(kernel.t) == 2001
+    pixel = np.max(np.abs(kernel.energy_error)) / TRACE_HALF_HEIGHT_PX
+    return float(np.max(np.abs((energy - energy[0]) - kernel.energy_error))), float(pixel)
+
+
+def runnable(model, method) -> bool:
+    try:
+        pl.step(model, np.zeros(model.n) + 0.1, np.zeros(model.n), dt=H, method=method)
+    except ValueError:
+        return False
+    return True
+
+
+CASES = [(stem, method) for stem in MODELS for method in MAIN_METHODS
+         if runnable(MODELS[stem], method)]
+
+
+@pytest.mark.parametrize("stem", list(MODELS))
+def test_the_generated_field_equals_the_python_field_at_random_states(page, stem):
+    _, base, _ = page
+    assert field_misfit(page, MODELS[stem], shipped_model_url(base, stem)) <= 1.0
+
+
+@pytest.mark.parametrize(("stem", "method"), CASES)
+def test_one_browser_step_agrees_with_pl_step(page, stem, method):
+    _, base, _ = page
+    assert step_misfit(page, MODELS[stem], shipped_model_url(base, stem), method) <= 1.0
+
+
+@pytest.mark.parametrize(("stem", "method"), CASES)
+def test_the_energy_error_over_20_s_matches_the_kernels_to_a_pixel(page, stem, method):
+    _, base, _ = page
+    difference, pixel = energy_error_misfit(page, MODELS[stem], shipped_model_url(base, stem),
+                                            method)
+    assert difference <= pixel
+
+
+def test_the_symplectic_methods_are_refused_where_the_kernel_refuses_them():
+    # the driven pendulum is damped: the kernel refuses both, so the browser has no case
+    assert ("driven_pendulum", "leapfrog") not in CASES
+    assert ("driven_pendulum", "semi_implicit_euler") not in CASES
+    assert len(CASES) == 23
+
+
+# ---- negative controls: each check fails on a defect of the kind it is there for -----------
+def wrong_sign_module(base) -> str:
+    """The double pendulum's module with the sign of one term of dp[1] flipped."""
+    from pendulum_lab.widgets.browser import BROWSER_FOLDER
+
+    text = (BROWSER_FOLDER / "models" / "double_pendulum.js").read_text()
+    line = next(x for x in text.splitlines() if x.strip().startswith("dp[1] ="))
+    flipped = line.replace(" + ", " - ", 1) if " + " in line else line.replace(" - ", " + ", 1)
+    assert flipped != line
+    return text.replace(line, flipped)
+
+
+def test_a_wrong_sign_in_one_generated_term_fails_both_checks(page):
+    _, base, _ = page
+    model = MODELS["double_pendulum"]
+    module = wrong_sign_module(base)
+    assert field_misfit(page, model, module) > 1e6
+    assert step_misfit(page, model, module, "rk4") > 1e3
+
+
+def test_a_wrong_weight_fails_the_step_and_the_energy_checks(page):
+    _, base, _ = page
+    model, module = MODELS["double_pendulum"], shipped_model_url(base, "double_pendulum")
+    rk4 = {"a": [[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]],
+           "b": [1 / 6, 1 / 3, 1 / 6, 1 / 3], "c": [0, 0.5, 0.5, 1]}
+    assert step_misfit(page, model, module, "rk4", tableau=rk4) > 1e3
+    difference, pixel = energy_error_misfit(page, model, module, "rk4", tableau=rk4)
+    assert difference > 10 * pixel
+    root = np.sqrt(3) / 6
+    gauss = {"a": [[0.25, 0.25 - root], [0.25 + root, 0.25]], "b": [0.6, 0.4],
+             "c": [0.5 - root, 0.5 + root]}
+    assert step_misfit(page, model, module, "glrk4", tableau=gauss) > 1e3
+
+
+def test_nothing_was_fetched_from_another_host(page):
+    p, base, requests = page
+    assert requests and all(u.startswith(base) or u.startswith("data:") for u in requests)
+    assert p.errors == []
