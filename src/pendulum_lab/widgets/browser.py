@@ -46,6 +46,7 @@ __all__ = [
     "model_module",
     "shipped_sources",
     "simulator_html",
+    "stale_shipped",
     "write_shipped",
 ]
 
@@ -206,6 +207,15 @@ def shipped_sources() -> dict[str, str]:
     """``{file name: text}`` of the shipped model modules, as the generator makes them now."""
     return {f"{stem}.js": model_module(factory()).source
             for stem, factory in SHIPPED_MODELS.items()}
+
+
+def stale_shipped(folder: Path | None = None) -> list[str]:
+    """The shipped model modules in ``folder`` (by default the package's) that are missing or
+    differ from what the generator makes now (empty when none has drifted)."""
+    folder = Path(folder) if folder is not None else BROWSER_FOLDER / "models"
+    return [name for name, text in shipped_sources().items()
+            if not (folder / name).is_file()
+            or (folder / name).read_text(encoding="utf-8") != text]
 
 
 def write_shipped(folder: Path | None = None) -> list[Path]:
