@@ -11,7 +11,11 @@ import pytest
 import sympy as sp
 
 import pendulum_lab as pl
-from pendulum_lab.codegen.browser import BrowserPrinter, browser_module_source, unprintable_functions
+from pendulum_lab.codegen.browser import (
+    BrowserPrinter,
+    browser_module_source,
+    unprintable_functions,
+)
 from pendulum_lab.codegen.cache import text_key
 from pendulum_lab.widgets import browser
 
