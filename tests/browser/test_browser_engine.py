@@ -217,3 +217,87 @@ def test_nothing_was_fetched_from_another_host(page):
     p, base, requests = page
     assert requests and all(u.startswith(base) or u.startswith("data:") for u in requests)
     assert p.errors == []
+
+
+# ---- the simulator without a kernel, mounted in a page as the website mounts it -------------
+@pytest.fixture(scope="module")
+def mounted(page):
+    """A page holding two kernel-free simulators (the double and the driven pendulum), as
+    ``simulator_html`` writes them for the website."""
+    from pendulum_lab.widgets.browser import browser_config, simulator_html
+
+    p, base, _ = page
+    body = "".join(simulator_html(browser_config(model, method=method, t_end=10.0),
+                                  "/browser/engine.js",
+                                  fallback_html='<p class="still">the still picture</p>')
+                   for model, method in ((MODELS["double_pendulum"], "glrk4"),
+                                         (MODELS["driven_pendulum"], "rk4")))
+    html = f'<!doctype html><html><head><link rel="stylesheet" href="/live.css"></head>' \
+           f"<body>{body}</body></html>"
+    p.route(f"{base}/trial.html", lambda route: route.fulfill(body=html, content_type="text/html"))
+    p.goto(f"{base}/trial.html")
+    p.wait_for_function(
+        "() => document.querySelectorAll('.plab-live[data-run=\"1\"]').length === 2")
+    return p
+
+
+def live_data(p, index=0) -> dict:
+    return p.evaluate("k => ({...document.querySelectorAll('.plab-live')[k].dataset})", index)
+
+
+def test_the_kernel_free_simulator_plays_a_run_computed_in_the_browser(mounted):
+    p = mounted
+    first = live_data(p)
+    assert first["states"] == "1001" and first["playing"] == "1"
+    p.wait_for_timeout(600)
+    later = live_data(p)
+    assert int(later["frames"]) > int(first["frames"]) + 10
+    assert float(later["time"]) > float(first["time"]) + 0.3
+    status = p.locator(".plab-engine-status").first.text_content()
+    assert "1000 steps of glrk4 (Δt = 0.01 s) computed in the browser" in status
+    assert p.locator(".plab-still").count() == 2  # the still picture stays for print
+
+
+def test_method_and_step_boxes_recompute_and_a_refused_method_says_why(mounted):
+    p = mounted
+    p.locator("select[aria-label=method]").first.select_option("leapfrog")
+    p.wait_for_function("() => document.querySelector('.plab-live').dataset.run === '2'")
+    p.locator("select[aria-label='time step']").first.select_option("0.02")
+    p.wait_for_function("() => document.querySelector('.plab-live').dataset.run === '3'")
+    assert "500 steps of leapfrog (Δt = 0.02 s)" in p.locator(".plab-engine-status").first \
+        .text_content()
+    driven = p.locator(".plab-browser-sim").nth(1)
+    driven.locator("select[aria-label=method]").select_option("leapfrog")
+    status = driven.locator(".plab-engine-status")
+    assert "leapfrog cannot integrate this model" in status.text_content()
+    assert status.get_attribute("data-kind") == "error"
+    assert live_data(p, 1)["run"] == "1"  # the previous motion goes on
+    assert driven.locator("select[aria-label=method]").input_value() == "rk4"
+
+
+def test_dragging_a_bob_restarts_the_motion_from_there_in_the_browser(mounted):
+    p = mounted
+    before = live_data(p)["run"]
+    canvas = p.locator(".plab-live-canvas").first
+    box = canvas.bounding_box()
+    s = float(live_data(p)["scale"])
+    # pause at the start, then drag the upper bob to the right of the pivot
+    p.evaluate("() => { const el = document.querySelector('.plab-live'); el.focus(); }")
+    p.keyboard.press("Home")
+    p.wait_for_function("() => document.querySelector('.plab-live').dataset.time === '0.0000'")
+    p.wait_for_timeout(100)  # a frame drawn at t = 0
+    theta = [float(a) for a in live_data(p)["theta"].split(",")]
+    assert theta == pytest.approx([2.0, 2.5], abs=1e-5)
+    x0 = box["x"] + 170 + s * np.sin(theta[0])
+    y0 = box["y"] + 170 + s * np.cos(theta[0])
+    p.mouse.move(x0, y0)
+    p.mouse.down()
+    p.mouse.move(box["x"] + 170 + 60, box["y"] + 170, steps=4)
+    p.mouse.up()
+    p.wait_for_function(f"() => document.querySelector('.plab-live').dataset.run !== '{before}'")
+    p.keyboard.press("Home")
+    p.wait_for_timeout(100)
+    angles = [float(a) for a in live_data(p)["theta"].split(",")]
+    assert angles[0] == pytest.approx(np.pi / 2, abs=0.02)
+    assert angles[1] == pytest.approx(theta[1], abs=1e-4)
+    assert p.errors == []
