@@ -704,6 +704,43 @@ class CoursePlan(Directive):
         return [table, total]
 
 
+class LiveSimulator(Directive):
+    """``live-simulator``: a simulator that integrates in the reader's browser, no kernel
+    (``pendulum_lab.widgets.browser``). Options: ``model`` (a stem of ``SHIPPED_MODELS``),
+    ``method``, ``dt``, ``t_end``. The content is the still picture kept for readers without
+    JavaScript and for print. A model the browser cannot run leaves the still picture with a
+    sentence saying why."""
+
+    has_content = True
+    option_spec = {"model": str, "method": str, "dt": float, "t_end": float}
+
+    def run(self):
+        from pendulum_lab.widgets.browser import (
+            SHIPPED_MODELS,
+            browser_config,
+            browser_refusal,
+            simulator_html,
+        )
+
+        env = self.state.document.settings.env
+        stem = self.options.get("model", "double_pendulum")
+        if stem not in SHIPPED_MODELS:
+            raise self.error(f"`model` must be one of {list(SHIPPED_MODELS)}, got {stem!r}")
+        model = SHIPPED_MODELS[stem]()
+        still = nodes.container(classes=["plab-still"])
+        self.state.nested_parse(self.content, self.content_offset, still)
+        reason = browser_refusal(model)
+        if reason is not None:
+            return [nodes.paragraph(text=f"The live simulator cannot run here: {reason}."), still]
+        config = browser_config(model, method=self.options.get("method", "glrk4"),
+                                dt=self.options.get("dt", 0.01),
+                                t_end=self.options.get("t_end", 20.0))
+        engine = ("../" * env.docname.count("/") or "./") + "_static/browser/engine.js"
+        live = simulator_html(config, engine).replace(
+            '<div class="plab-still"></div>\n</div>\n', "</div>\n")
+        return [nodes.raw("", live, format="html"), still]
+
+
 def setup(app):
     app.add_config_value("course_repository_url", "", "html", types=(str,))
     app.add_config_value("course_jupyterhub_url", "", "html", types=(str,))
@@ -726,4 +763,5 @@ def setup(app):
     app.add_directive("course-map", CourseMap)
     app.add_directive("course-toctree", CourseToctree)
     app.add_directive("course-plan", CoursePlan)
+    app.add_directive("live-simulator", LiveSimulator)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
