@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 import sympy as sp
 
@@ -82,3 +83,19 @@ def test_a_new_model_gets_its_module_on_demand():
     assert made.stem == "chain4" and made.name == f"chain4_{made.key}.js"
     assert "export function hamilton" in made.source and "solveSymmetric" in made.source
     assert browser.model_module(pl.double_pendulum(m1=2.0)).stem == "double_pendulum"
+
+
+def test_a_live_simulators_display_carries_its_settings_for_the_browser():
+    from pendulum_lab.widgets import live_simulator
+    from pendulum_lab.widgets.live import BROWSER_SETTINGS
+
+    view = "application/vnd.jupyter.widget-view+json"
+    sim = live_simulator(pl.double_pendulum(), t_end=2.0, dt=0.02, method="rk4")
+    settings = sim._repr_mimebundle_()[view][BROWSER_SETTINGS]
+    assert settings == browser.browser_config(pl.double_pendulum(), [2.0, 2.5], [0.0, 0.0],
+                                              t_end=2.0, dt=0.02, method="rk4")
+    sim.drag(0, 1.0, 0.0)
+    moved = sim._repr_mimebundle_()[view][BROWSER_SETTINGS]
+    assert moved["theta0"][0] == pytest.approx(np.pi / 2) and moved["theta0"][1] == 2.5
+    chain = live_simulator(pl.n_pendulum(7), t_end=1.0, dt=0.05, method="rk4")
+    assert "beyond what a browser" in chain._repr_mimebundle_()[view][BROWSER_SETTINGS]["refusal"]
