@@ -310,8 +310,8 @@ def _insert_browser_simulator(bundle, config: dict, docname: str) -> None:
     parent.insert(place, nodes.raw("", simulator_html(config, engine).replace(
         '<div class="plab-still"></div>\n', ""), format="html"))
     parent.insert(place + 1, nodes.paragraph(
-        "", "The simulator above runs in your browser (no kernel): drag a bob, pick a method "
-        "and a step. The picture below is its first run, drawn by the kernel."))
+        "", "Above, this run integrated in your browser, without a kernel: drag a bob, pick a "
+        "method and a step. Below, the same run as the kernel drew it."))
 
 
 # ------------------------------------------------------------------------------ launch buttons

@@ -45,8 +45,10 @@ __all__ = [
     "browser_refusal",
     "model_module",
     "shipped_sources",
+    "run_settings",
     "simulator_html",
     "stale_shipped",
+    "with_run_settings",
     "write_shipped",
 ]
 
@@ -129,7 +131,8 @@ def browser_config(model: PendulumModel, theta0=None, omega0=None, *, t_end: flo
     """What ``engine.js``'s ``mount`` needs to run ``model`` in the browser (JSON-ready).
 
     ``module`` is the URL of the model's ES module relative to ``engine.js`` (by default the
-    shipped one, ``models/<stem>.js``); the initial angles and velocities default to the
+    shipped one, ``models/<stem>.js``; for a model that is not shipped, its module's text
+    travels as ``source``, made on demand); the initial angles and velocities default to the
     simulators' (:func:`pendulum_lab.widgets.live_simulator`). ``method`` is one of
     :data:`~pendulum_lab.integrators.registry.MAIN_METHODS`, the five the browser has.
     """
@@ -151,11 +154,14 @@ def browser_config(model: PendulumModel, theta0=None, omega0=None, *, t_end: flo
     if not model.is_chain:
         points = np.stack(model.positions(theta0[None], np.zeros(1)), axis=-1)
     figure = figure_message(model, points)
+    shipped = made.stem in SHIPPED_MODELS
     refused = _refusals(model, MAIN_METHODS)
     if method in refused:
         raise ValueError(refused[method])
     return {
-        "module": module or f"./models/{made.stem}.js",
+        # a shipped model's module is a file beside engine.js; any other travels in the page
+        "module": module or (f"./models/{made.stem}.js" if shipped else None),
+        "source": None if module or shipped else made.source,
         "key": made.key,
         "name": model.chain.name if not model.is_chain else made.stem.replace("_", " "),
         "params": [float(v) for v in model.parameter_values.values()],
@@ -175,6 +181,35 @@ def browser_config(model: PendulumModel, theta0=None, omega0=None, *, t_end: flo
         "speeds": list(SPEEDS),
         "trail": float(trail),
     }
+
+
+def run_settings(model: PendulumModel, trajectory, trail: float = 2.0) -> dict:
+    """A kernel's run as :func:`browser_config` gives it to the browser's engine (its model,
+    first state, length, step and method), or ``{"refusal": sentence}`` if the browser cannot
+    run it."""
+    refusal = browser_refusal(model)
+    if refusal is None:
+        try:
+            if trajectory.theta.ndim != 2:
+                raise ValueError("an ensemble of runs plays in the kernel only")
+            return browser_config(model, trajectory.theta[0], trajectory.omega[0],
+                                  t_end=float(trajectory.t[-1] - trajectory.t[0]),
+                                  dt=trajectory.dt, method=trajectory.method.name, trail=trail)
+        except ValueError as err:
+            refusal = str(err)
+    return {"refusal": refusal}
+
+
+def with_run_settings(bundle: dict, settings: dict) -> dict:
+    """``bundle`` (a widget's display) with ``settings`` in its widget view's data, under
+    :data:`~pendulum_lab.widgets.live.BROWSER_SETTINGS`: the site's notebook reader skips mime
+    types it does not know, and the widget managers read only ``model_id`` from the view."""
+    from .live import BROWSER_SETTINGS
+
+    view = "application/vnd.jupyter.widget-view+json"
+    if isinstance(bundle.get(view), dict):
+        bundle[view] = {**bundle[view], BROWSER_SETTINGS: settings}
+    return bundle
 
 
 def simulator_html(config: dict, engine_url: str, *, fallback_html: str = "") -> str:

@@ -360,27 +360,16 @@ class LiveSimulator(Instrument):
     def _repr_mimebundle_(self, **kwargs):
         """The widget, its still picture and, for a page without a kernel (the course website),
         the run's settings as the browser's engine takes them (:data:`BROWSER_SETTINGS`)."""
-        bundle = super()._repr_mimebundle_(**kwargs)
-        view = "application/vnd.jupyter.widget-view+json"
-        if isinstance(bundle.get(view), dict):
-            bundle[view] = {**bundle[view], BROWSER_SETTINGS: self.browser_settings()}
-        return bundle
+        from .browser import with_run_settings  # browser imports this module
+
+        return with_run_settings(super()._repr_mimebundle_(**kwargs), self.browser_settings())
 
     def browser_settings(self) -> dict:
         """The current run as :func:`~pendulum_lab.widgets.browser.browser_config` gives it to
         the browser's engine, or ``{"refusal": sentence}`` if the browser cannot run it."""
-        from .browser import browser_config, browser_refusal  # browser imports this module
+        from .browser import run_settings
 
-        traj = self.trajectory
-        refusal = browser_refusal(self.model)
-        if refusal is None:
-            try:
-                return browser_config(self.model, traj.theta[0], traj.omega[0],
-                                      t_end=float(traj.t[-1] - traj.t[0]), dt=traj.dt,
-                                      method=traj.method.name, trail=self.view.trail)
-            except ValueError as err:
-                refusal = str(err)
-        return {"refusal": refusal}
+        return run_settings(self.model, self.trajectory, self.view.trail)
 
     # ---- dragging ---------------------------------------------------------------------------
     def drag(self, bob: int, x: float, y: float, theta=None) -> bool:

@@ -210,7 +210,10 @@ function control(tag, attributes, label) {
 // Mount a kernel-free simulator in `el`; `config` as widgets.browser.browser_config writes it.
 // Returns {model, simulate(), run} for scripts and tests; the run shown is `state.run`.
 export async function mount(el, config) {
-  const module = await import(new URL(config.module, config.base || import.meta.url).href);
+  // a shipped model's module is a file; any other model's text came in the config
+  const module = await import(config.source
+    ? URL.createObjectURL(new Blob([config.source], { type: "text/javascript" }))
+    : new URL(config.module, config.base || import.meta.url).href);
   const params = Float64Array.from(config.params);
   const state = { theta: Float64Array.from(config.theta0), omega: Float64Array.from(config.omega0),
     method: config.method, dt: config.dt, id: 0, run: null };
