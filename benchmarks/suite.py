@@ -33,6 +33,7 @@ from harness import (
     verdict,
 )
 from item_bifurcation import bench_bifurcation
+from item_browser import bench_browser
 from item_c_limit import bench_c_limit
 from item_distributed import bench_distributed
 from item_ensemble import bench_ensemble
@@ -84,6 +85,7 @@ ITEMS = {
     "long_chains": (13, bench_long_chains, False),
     "distributed": (14, bench_distributed, False),
     "systems": (15, bench_systems, False),
+    "browser": (16, bench_browser, False),
 }
 
 

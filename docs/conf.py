@@ -90,8 +90,10 @@ mathjax_path = "mathjax/tex-mml-chtml.js"
 # ---- HTML ------------------------------------------------------------------------------------
 html_theme = "sphinx_book_theme"
 html_title = "pendulum_lab"
-html_static_path = ["_static", "_vendor"]
-html_css_files = ["course.css"]
+# The package's browser modules (the simulator, its kernel-free engine, the generated models)
+# go into _static as they ship, for the live simulators of the "try it" page.
+html_static_path = ["_static", "_vendor", "../src/pendulum_lab/widgets/static"]
+html_css_files = ["course.css", "live.css"]
 html_favicon = "_static/favicon.svg"  # also spares the browser a request for /favicon.ico
 html_context = {"default_mode": "auto"}  # light or dark as the reader's system prefers
 html_last_updated_fmt = None

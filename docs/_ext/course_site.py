@@ -59,6 +59,9 @@ logger = logging.getLogger(__name__)
 
 WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 PICTURE_TYPES = ("image/png", "image/jpeg", "image/gif", "image/svg+xml")
+#: The key of a live simulator's settings for the browser's engine in its widget view's data
+#: (pendulum_lab.widgets.live.BROWSER_SETTINGS).
+BROWSER_SETTINGS = "pendulum_lab_browser"
 NOTEBOOK_FOLDER = "notebooks"
 FINGERPRINT_FILE = ".package-fingerprint"
 PROGRESS_FILE = ".notebooks-started"
@@ -253,6 +256,8 @@ def replace_widgets(app, doctree: nodes.document) -> None:
         view = re.search(r'"model_id"\s*:\s*"([^"]+)"', kinds[WIDGET_VIEW].astext())
         if view and _is_progress_bar(view.group(1), models):
             bundle.parent.remove(bundle)
+        elif _browser_settings(kinds[WIDGET_VIEW]) and any(k in PICTURE_TYPES for k in kinds):
+            _insert_browser_simulator(bundle, _browser_settings(kinds[WIDGET_VIEW]), docname)
         elif any(kind in PICTURE_TYPES for kind in kinds):
             note = _live_only_note(
                 "This picture shows the explorer at its default settings; its controls run "
@@ -277,6 +282,36 @@ def replace_widgets(app, doctree: nodes.document) -> None:
     # Without a kernel the state would only show controls that do nothing: not embedded.
     for key in [k for k in js_files if k.startswith("ipywidgets")]:
         del js_files[key]
+
+
+def _browser_settings(view_node) -> dict | None:
+    """A live simulator's settings for the browser, from its widget view's data; else None."""
+    text = view_node.astext()  # the view's JSON, inside the HTML that shows it
+    try:
+        view = json.loads(text[text.index("{"):text.rindex("}") + 1])
+    except ValueError:
+        return None
+    return view.get(BROWSER_SETTINGS) if isinstance(view, dict) else None
+
+
+def _insert_browser_simulator(bundle, config: dict, docname: str) -> None:
+    """Put a simulator that integrates in the reader's browser before a live simulator's still
+    picture (which stays, for readers without JavaScript and for print); or, if the browser
+    cannot run it, the sentence saying why."""
+    from pendulum_lab.widgets.browser import simulator_html
+
+    parent, place = bundle.parent, bundle.parent.index(bundle)
+    if "refusal" in config:
+        parent.insert(place + 1, _live_only_note(
+            f"The simulator cannot run in this page ({config['refusal']}); the picture shows "
+            "its first run."))
+        return
+    engine = ("../" * docname.count("/") or "./") + "_static/browser/engine.js"
+    parent.insert(place, nodes.raw("", simulator_html(config, engine).replace(
+        '<div class="plab-still"></div>\n', ""), format="html"))
+    parent.insert(place + 1, nodes.paragraph(
+        "", "Above, this run integrated in your browser, without a kernel: drag a bob, pick a "
+        "method and a step. Below, the same run as the kernel drew it."))
 
 
 # ------------------------------------------------------------------------------ launch buttons
@@ -704,6 +739,43 @@ class CoursePlan(Directive):
         return [table, total]
 
 
+class LiveSimulator(Directive):
+    """``live-simulator``: a simulator that integrates in the reader's browser, no kernel
+    (``pendulum_lab.widgets.browser``). Options: ``model`` (a stem of ``SHIPPED_MODELS``),
+    ``method``, ``dt``, ``t_end``. The content is the still picture kept for readers without
+    JavaScript and for print. A model the browser cannot run leaves the still picture with a
+    sentence saying why."""
+
+    has_content = True
+    option_spec = {"model": str, "method": str, "dt": float, "t_end": float}
+
+    def run(self):
+        from pendulum_lab.widgets.browser import (
+            SHIPPED_MODELS,
+            browser_config,
+            browser_refusal,
+            simulator_html,
+        )
+
+        env = self.state.document.settings.env
+        stem = self.options.get("model", "double_pendulum")
+        if stem not in SHIPPED_MODELS:
+            raise self.error(f"`model` must be one of {list(SHIPPED_MODELS)}, got {stem!r}")
+        model = SHIPPED_MODELS[stem]()
+        still = nodes.container(classes=["plab-still"])
+        self.state.nested_parse(self.content, self.content_offset, still)
+        reason = browser_refusal(model)
+        if reason is not None:
+            return [nodes.paragraph(text=f"The live simulator cannot run here: {reason}."), still]
+        config = browser_config(model, method=self.options.get("method", "glrk4"),
+                                dt=self.options.get("dt", 0.01),
+                                t_end=self.options.get("t_end", 20.0))
+        engine = ("../" * env.docname.count("/") or "./") + "_static/browser/engine.js"
+        live = simulator_html(config, engine).replace(
+            '<div class="plab-still"></div>\n</div>\n', "</div>\n")
+        return [nodes.raw("", live, format="html"), still]
+
+
 def setup(app):
     app.add_config_value("course_repository_url", "", "html", types=(str,))
     app.add_config_value("course_jupyterhub_url", "", "html", types=(str,))
@@ -726,4 +798,5 @@ def setup(app):
     app.add_directive("course-map", CourseMap)
     app.add_directive("course-toctree", CourseToctree)
     app.add_directive("course-plan", CoursePlan)
+    app.add_directive("live-simulator", LiveSimulator)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -61,7 +61,8 @@ def well_formed(suite, section, number):
 @pytest.mark.parametrize(
     "key",
     ["slider", "first_use", "long_run", "report_glrk4", "ensemble", "c_limit", "variational",
-     "bifurcation", "per_eval", "heyoka", "pyhamsys", "long_chains", "distributed", "systems"],
+     "bifurcation", "per_eval", "heyoka", "pyhamsys", "long_chains", "distributed", "systems",
+     "browser"],
 )
 def test_each_item_runs_and_returns_rows(suite, key):
     if suite.ITEMS[key][2] and shutil.which(suite.c_yardstick.COMPILER) is None:

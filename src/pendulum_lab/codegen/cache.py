@@ -106,6 +106,7 @@ __all__ = [
     "imported_modules",
     "load_generated",
     "module_dependencies",
+    "text_key",
 ]
 
 PACKAGE = "pendulum_lab"
@@ -345,6 +346,18 @@ def code_key(source: str, generator: str | None = None, inject: dict | None = No
     for part in [source, _versions(), *constants]:
         digest.update(part.encode())
     for module in module_dependencies(modules):
+        digest.update(module.encode())
+        digest.update(_parsed(module)[0].encode())
+    return digest.hexdigest()[:16]
+
+
+def text_key(text: str, generator: str) -> str:
+    """A key (16 hex digits) of generated code that is not Python (the browser's ES modules),
+    by the rules of :func:`code_key`: the text itself, and the syntax trees of the package
+    module ``generator`` that wrote it and of every package module that one imports. No
+    compiler version counts: the text is all a browser runs."""
+    digest = hashlib.sha256(text.encode())
+    for module in module_dependencies([generator]):
         digest.update(module.encode())
         digest.update(_parsed(module)[0].encode())
     return digest.hexdigest()[:16]

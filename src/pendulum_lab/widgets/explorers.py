@@ -90,6 +90,16 @@ class Explorer(Instrument):
     def prepare(self) -> SimulateCall:
         return call_from_controls(self.model, self.controls)
 
+    def _repr_mimebundle_(self, **kwargs):
+        """The widget and its still picture; where the browser can run the first run (one
+        model, a method the browser has), also its settings, with which a page without a
+        kernel (the course website) shows that run live above the picture."""
+        from .browser import run_settings, with_run_settings  # browser imports the widgets
+
+        bundle = super()._repr_mimebundle_(**kwargs)
+        settings = run_settings(self.model, self.trajectory)
+        return bundle if "refusal" in settings else with_run_settings(bundle, settings)
+
     def drawing_code(self) -> str:
         return panels_code([name if plotting.PANELS.get(name) is function else function
                             for name, function in self.panels], self._cols)

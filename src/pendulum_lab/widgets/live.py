@@ -59,6 +59,7 @@ from .controls import (
 from .instrument import Instrument
 
 __all__ = [
+    "BROWSER_SETTINGS",
     "CHUNK_STATES",
     "PLAYBACK_SPACING",
     "LiveSimulator",
@@ -69,6 +70,12 @@ __all__ = [
     "run_messages",
 ]
 
+#: The key, in the widget view's data, of what a page without a kernel needs to run the
+#: simulator in the browser (:func:`pendulum_lab.widgets.browser.browser_config`, or
+#: ``{"refusal": sentence}``). Inside the widget view, not a mime type of its own: the site's
+#: notebook reader skips (and warns about) mime types it does not know, and the widget
+#: managers read only ``model_id`` from the view.
+BROWSER_SETTINGS = "pendulum_lab_browser"
 #: Saved states are at most this far apart in time [s] (the browser interpolates between them).
 PLAYBACK_SPACING = 0.01
 #: Largest number of states in one message.
@@ -349,6 +356,20 @@ class LiveSimulator(Instrument):
         """The run drawn by :func:`pendulum_lab.animation.still_frame` at its last state (the
         whole motion's energies), for a page without a kernel, where nothing can play."""
         return "image/png", still_frame(self.trajectory, self.model, trail=self.view.trail)
+
+    def _repr_mimebundle_(self, **kwargs):
+        """The widget, its still picture and, for a page without a kernel (the course website),
+        the run's settings as the browser's engine takes them (:data:`BROWSER_SETTINGS`)."""
+        from .browser import with_run_settings  # browser imports this module
+
+        return with_run_settings(super()._repr_mimebundle_(**kwargs), self.browser_settings())
+
+    def browser_settings(self) -> dict:
+        """The current run as :func:`~pendulum_lab.widgets.browser.browser_config` gives it to
+        the browser's engine, or ``{"refusal": sentence}`` if the browser cannot run it."""
+        from .browser import run_settings
+
+        return run_settings(self.model, self.trajectory, self.view.trail)
 
     # ---- dragging ---------------------------------------------------------------------------
     def drag(self, bob: int, x: float, y: float, theta=None) -> bool:

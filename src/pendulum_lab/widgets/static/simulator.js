@@ -315,7 +315,8 @@ function render({ model, el }) {
     if (!run || run.available === 0) {
       c.fillStyle = COLOURS.faint;
       c.font = "14px sans-serif";
-      c.fillText("waiting for the kernel…", 20, 30);
+      // in a page without a kernel the browser computes the run (browser/engine.js)
+      c.fillText(model.get("engine") === "browser" ? "computing…" : "waiting for the kernel…", 20, 30);
       return;
     }
     const angles = dragging ? dragging.angles : anglesAt(t);

@@ -1,0 +1,64 @@
+"""A notebook's live simulator on the website: it integrates in the reader's browser.
+
+A throwaway site built with the course's configuration holds a notebook with three live
+simulators and an explorer: the double pendulum, which the browser can run from its shipped
+module; a chain of seven links, which it cannot (the negative control); the Kapitza pendulum,
+whose module is not shipped and travels in the page; and an explorer's run. In Chromium each
+runnable one is computed in the browser above its still picture, the chain shows only its
+picture with the reason.
+"""
+
+from __future__ import annotations
+
+import pytest
+from browser_engine import engine_page
+from test_site_controls import INDEX, Annotated, Markdown, build, make_site, notebook
+
+pytestmark = pytest.mark.site
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("browser-sim-site")
+    make_site(folder, {
+        "index.md": INDEX,
+        "lesson.ipynb": notebook(
+            Markdown("# Lesson"),
+            Annotated("import pendulum_lab as pl\nfrom pendulum_lab import widgets\n"
+                      "widgets.live_simulator(pl.double_pendulum(), t_end=5.0)",
+                      alt=["The double pendulum's first run and its energies"]),
+            Annotated("widgets.live_simulator(pl.n_pendulum(7), t_end=1.0, dt=0.05, "
+                      "method='rk4')", alt=["A chain of seven links and its energies"]),
+            Annotated("widgets.live_simulator(pl.kapitza_pendulum(), t_end=2.0, dt=0.001, "
+                      "method='rk4')", alt=["The Kapitza pendulum held up by its shaking"]),
+            Annotated("widgets.explore(pl.double_pendulum(), method='leapfrog', t_end=5.0, "
+                      "dt=0.02)", alt=["An explorer's plots of the double pendulum"]),
+        ),
+    })
+    result = build(folder)
+    # the throwaway index has no section "run-live" to link to; nothing else may warn
+    warnings = [line for line in result.log.splitlines()
+                if ": WARNING:" in line and "run-live" not in line]
+    assert warnings == []
+    return result.output
+
+
+def test_a_notebooks_live_simulator_runs_in_the_browser_above_its_picture(site, tmp_path):
+    with engine_page(site, tmp=tmp_path) as (page, base, requests):
+        page.goto(f"{base}/lesson.html")
+        page.wait_for_function(
+            "() => [...document.querySelectorAll('.plab-live')].filter("
+            "(el) => el.dataset.run === '1').length === 3", timeout=30_000)
+        first = int(page.evaluate("() => document.querySelector('.plab-live').dataset.frames"))
+        page.wait_for_timeout(500)
+        later = page.evaluate("() => ({...document.querySelector('.plab-live').dataset})")
+        assert int(later["frames"]) > first and later["states"] == "501"
+        assert page.locator(".plab-browser-sim").count() == 3  # the 7-link chain has none
+        assert page.locator("img").count() == 4  # every still picture stays
+        text = page.locator("article, body").first.inner_text()
+        assert "500 steps of glrk4 (Δt = 0.01 s) computed in the browser" in text
+        assert "cannot run in this page (a model of 7 coordinates" in text
+        assert "2000 steps of rk4 (Δt = 0.001 s) computed in the browser" in text  # Kapitza
+        assert "250 steps of leapfrog (Δt = 0.02 s) computed in the browser" in text
+        assert all(url.startswith(base) for url in requests)
+        assert [e for e in page.errors if "favicon" not in e and "404" not in e] == []
