@@ -101,7 +101,7 @@ def class_at_once(students: int, shared: Path | None, work: Path) -> dict:
         processes.append(subprocess.Popen([sys.executable, "-c", code],
                                           env=_student_env(home, shared),
                                           stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                          text=True))
+                                          text=True, encoding="utf-8"))
     ends = [None] * students
     while any(end is None for end in ends):
         for index, process in enumerate(processes):

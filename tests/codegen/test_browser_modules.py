@@ -87,7 +87,7 @@ def test_a_new_model_gets_its_module_on_demand():
 
 def test_a_live_simulators_display_carries_its_settings_for_the_browser():
     from pendulum_lab.widgets import live_simulator
-    from pendulum_lab.widgets.live import BROWSER_SETTINGS
+    from pendulum_lab.widgets.channel import BROWSER_SETTINGS
 
     view = "application/vnd.jupyter.widget-view+json"
     sim = live_simulator(pl.double_pendulum(), t_end=2.0, dt=0.02, method="rk4")
@@ -111,7 +111,7 @@ def test_a_model_that_is_not_shipped_travels_with_its_module_text():
 
 def test_an_explorers_display_carries_its_run_for_the_browser_only_where_it_can_run():
     from pendulum_lab.widgets import explore
-    from pendulum_lab.widgets.live import BROWSER_SETTINGS
+    from pendulum_lab.widgets.channel import BROWSER_SETTINGS
 
     view = "application/vnd.jupyter.widget-view+json"
     runs = explore(pl.double_pendulum(), method="leapfrog", t_end=2.0, dt=0.02)

@@ -107,7 +107,7 @@ def sideways_pendulum(**options):
 
 
 def test_a_pendulum_shaken_sideways_is_drawn_with_its_rod_and_moving_pivot():
-    from pendulum_lab.widgets.live import figure_message
+    from pendulum_lab.widgets.channel import figure_message
 
     model = sideways_pendulum()
     drawing = model.drawing

@@ -193,8 +193,9 @@ def _repository_problem(repo: str, branch: str | None, timeout: float) -> str | 
     command = [git, "ls-remote", "--symref", "--", _repository(repo)]
     command += [f"refs/heads/{branch}"] if branch else ["HEAD"]
     try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=timeout,
-                              stdin=subprocess.DEVNULL, check=False)
+        done = subprocess.run(command, capture_output=True, text=True, encoding="utf-8",
+                              errors="replace", timeout=timeout, stdin=subprocess.DEVNULL,
+                              check=False)
     except subprocess.TimeoutExpired:
         return f"the repository {repo} did not answer within {timeout:.0f} s"
     if done.returncode != 0:

@@ -33,9 +33,8 @@ from ..integrators.registry import MAIN_METHODS, get_method, unsuitability
 from ..model import require_model, simple_pendulum
 from ..model.pendulum import PendulumModel, double_pendulum, driven_pendulum, n_pendulum
 from ..model.system import elastic_pendulum
-from .channel import STATIC
+from .channel import BROWSER_SETTINGS, STATIC, figure_message
 from .controls import SPEEDS, energy_changers, energy_is_conserved, forces_text
-from .live import figure_message
 
 __all__ = [
     "BROWSER_FOLDER",
@@ -202,9 +201,8 @@ def run_settings(model: PendulumModel, trajectory, trail: float = 2.0) -> dict:
 
 def with_run_settings(bundle: dict, settings: dict) -> dict:
     """``bundle`` (a widget's display) with ``settings`` in its widget view's data, under
-    :data:`~pendulum_lab.widgets.live.BROWSER_SETTINGS`: the site's notebook reader skips mime
+    :data:`~pendulum_lab.widgets.channel.BROWSER_SETTINGS`: the site's notebook reader skips mime
     types it does not know, and the widget managers read only ``model_id`` from the view."""
-    from .live import BROWSER_SETTINGS
 
     view = "application/vnd.jupyter.widget-view+json"
     if isinstance(bundle.get(view), dict):

@@ -24,10 +24,18 @@ import anywidget
 import numpy as np
 import traitlets
 
-__all__ = ["STATIC", "ReplayWidget", "float32_buffer"]
+from ..model.pendulum import PendulumModel
+
+__all__ = ["BROWSER_SETTINGS", "STATIC", "ReplayWidget", "figure_message", "float32_buffer"]
 
 #: The ES modules and the stylesheet shipped with the package.
 STATIC = Path(__file__).resolve().parent / "static"
+#: The key, in the widget view's data, of what a page without a kernel needs to run the
+#: simulator in the browser (:func:`pendulum_lab.widgets.browser.browser_config`, or
+#: ``{"refusal": sentence}``). Inside the widget view, not a mime type of its own: the site's
+#: notebook reader skips (and warns about) mime types it does not know, and the widget
+#: managers read only ``model_id`` from the view.
+BROWSER_SETTINGS = "pendulum_lab_browser"
 
 
 def float32_buffer(values) -> memoryview:
@@ -98,3 +106,28 @@ class ReplayWidget(anywidget.AnyWidget):
     def _replay(self, content=None) -> None:
         for message, buffers in self._log:
             self._send_counted(message, buffers)
+
+
+def figure_message(model: PendulumModel, points=None) -> dict:
+    """What the browser draws the model with: ``kind`` (``"chain"``, whose points the browser
+    computes from the angles and ``lengths``, or ``"points"``, sent), the
+    :class:`~pendulum_lab.model.Drawing`'s ``masses``, ``rods``, ``springs`` and ``movable``
+    (None or the sentence refusing a drag), ``uses_origin``, ``trailed`` (the point whose
+    path is the trail: the last massive one) and ``reach`` [m] (a chain's length, else the
+    farthest point of ``points``, shape ``(states, points, 2)``, from the origin)."""
+    drawing = model.drawing
+    masses = [float(m) for m in drawing.masses]
+    reach = drawing.reach
+    if reach is None:
+        finite = np.abs(points[np.isfinite(points)])
+        reach = float(finite.max()) if finite.size and finite.max() > 0 else 1.0
+    return {
+        "kind": "chain" if model.is_chain else "points",
+        "masses": masses,
+        "rods": [list(pair) for pair in drawing.rods],
+        "springs": [list(pair) for pair in drawing.springs],
+        "movable": list(drawing.movable),
+        "uses_origin": drawing.uses_origin,
+        "trailed": max(k for k, m in enumerate(masses) if m > 0),
+        "reach": float(reach),
+    }

@@ -43,8 +43,9 @@ from ..driver.simulate import Trajectory
 from ..model import require_model, wrap_angle
 from ..model.pendulum import PendulumModel
 from ..plotting.scene import TRAIL, still_frame
+from .browser import run_settings, with_run_settings
 from .calls import SimulateCall
-from .channel import STATIC, ReplayWidget, float32_buffer
+from .channel import STATIC, ReplayWidget, figure_message, float32_buffer
 from .controls import (
     SIMULATOR_T_END,
     SPEEDS,
@@ -59,23 +60,15 @@ from .controls import (
 from .instrument import Instrument
 
 __all__ = [
-    "BROWSER_SETTINGS",
     "CHUNK_STATES",
     "PLAYBACK_SPACING",
     "LiveSimulator",
     "PendulumView",
-    "figure_message",
     "live_simulator",
     "released_angles",
     "run_messages",
 ]
 
-#: The key, in the widget view's data, of what a page without a kernel needs to run the
-#: simulator in the browser (:func:`pendulum_lab.widgets.browser.browser_config`, or
-#: ``{"refusal": sentence}``). Inside the widget view, not a mime type of its own: the site's
-#: notebook reader skips (and warns about) mime types it does not know, and the widget
-#: managers read only ``model_id`` from the view.
-BROWSER_SETTINGS = "pendulum_lab_browser"
 #: Saved states are at most this far apart in time [s] (the browser interpolates between them).
 PLAYBACK_SPACING = 0.01
 #: Largest number of states in one message.
@@ -190,31 +183,6 @@ def run_messages(
         buffers = [float32_buffer(a[part]) for a in sent]
         messages.append((content, buffers))
     return messages
-
-
-def figure_message(model: PendulumModel, points=None) -> dict:
-    """What the browser draws the model with: ``kind`` (``"chain"``, whose points the browser
-    computes from the angles and ``lengths``, or ``"points"``, sent), the
-    :class:`~pendulum_lab.model.Drawing`'s ``masses``, ``rods``, ``springs`` and ``movable``
-    (None or the sentence refusing a drag), ``uses_origin``, ``trailed`` (the point whose
-    path is the trail: the last massive one) and ``reach`` [m] (a chain's length, else the
-    farthest point of ``points``, shape ``(states, points, 2)``, from the origin)."""
-    drawing = model.drawing
-    masses = [float(m) for m in drawing.masses]
-    reach = drawing.reach
-    if reach is None:
-        finite = np.abs(points[np.isfinite(points)])
-        reach = float(finite.max()) if finite.size and finite.max() > 0 else 1.0
-    return {
-        "kind": "chain" if model.is_chain else "points",
-        "masses": masses,
-        "rods": [list(pair) for pair in drawing.rods],
-        "springs": [list(pair) for pair in drawing.springs],
-        "movable": list(drawing.movable),
-        "uses_origin": drawing.uses_origin,
-        "trailed": max(k for k, m in enumerate(masses) if m > 0),
-        "reach": float(reach),
-    }
 
 
 def released_angles(model: PendulumModel, theta, bob: int, x: float, y: float) -> np.ndarray:
@@ -360,15 +328,11 @@ class LiveSimulator(Instrument):
     def _repr_mimebundle_(self, **kwargs):
         """The widget, its still picture and, for a page without a kernel (the course website),
         the run's settings as the browser's engine takes them (:data:`BROWSER_SETTINGS`)."""
-        from .browser import with_run_settings  # browser imports this module
-
         return with_run_settings(super()._repr_mimebundle_(**kwargs), self.browser_settings())
 
     def browser_settings(self) -> dict:
         """The current run as :func:`~pendulum_lab.widgets.browser.browser_config` gives it to
         the browser's engine, or ``{"refusal": sentence}`` if the browser cannot run it."""
-        from .browser import run_settings
-
         return run_settings(self.model, self.trajectory, self.view.trail)
 
     # ---- dragging ---------------------------------------------------------------------------
