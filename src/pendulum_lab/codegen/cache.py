@@ -353,13 +353,15 @@ def code_key(source: str, generator: str | None = None, inject: dict | None = No
 
 def text_key(text: str, generator: str) -> str:
     """A key (16 hex digits) of generated code that is not Python (the browser's ES modules),
-    by the rules of :func:`code_key`: the text itself, and the syntax trees of the package
-    module ``generator`` that wrote it and of every package module that one imports. No
-    compiler version counts: the text is all a browser runs."""
+    by the rules of :func:`code_key`: the text itself, and the code of the package module
+    ``generator`` that wrote it and of every package module that one imports. No compiler
+    version counts: the text is all a browser runs. The modules count by their source text,
+    not their syntax trees, whose dumps differ between Python versions (a file shipped with
+    the package must have one key on every Python)."""
     digest = hashlib.sha256(text.encode())
     for module in module_dependencies([generator]):
         digest.update(module.encode())
-        digest.update(_parsed(module)[0].encode())
+        digest.update(_module_path(module).read_bytes().replace(b"\r\n", b"\n"))
     return digest.hexdigest()[:16]
 
 
