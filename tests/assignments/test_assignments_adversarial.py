@@ -186,7 +186,7 @@ def arena(kit, tmp_path_factory):
     assert len(paths) == 13
     started = time.perf_counter()
     grades = tool.grade_class(kit.folders[A2], paths, out, jobs=2, progress=False,
-                              cell_seconds=60.0, total_seconds=600.0, cache=kit.cache)
+                              cell_seconds=30.0, total_seconds=600.0, cache=kit.cache)
     seconds = time.perf_counter() - started
     time.sleep(1.0)
     leftovers = [" ".join(proc.info["cmdline"]) for proc in psutil.process_iter(["cmdline"])
