@@ -7,36 +7,20 @@ Used by ``test_browser_engine.py`` (and the benchmark of steps per second); see 
 from __future__ import annotations
 
 import contextlib
-import functools
-import http.server
 import os
-import threading
 from pathlib import Path
 
-from lab_harness import CHROMIUM_ARGS, browser_unavailable_reason, chromium_path, skip_or_fail
+from lab_harness import (
+    CHROMIUM_ARGS,
+    browser_unavailable_reason,
+    chromium_path,
+    serve,
+    skip_or_fail,
+)
 
 from pendulum_lab.widgets.browser import BROWSER_FOLDER, SHIPPED_MODELS
 
 STATIC = BROWSER_FOLDER.parent
-
-
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, *args):  # the tests report what matters
-        pass
-
-
-@contextlib.contextmanager
-def serve(folder: Path):
-    """Serve ``folder`` on 127.0.0.1 at a free port; yields the base URL."""
-    handler = functools.partial(_QuietHandler, directory=str(folder))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}"
-    finally:
-        server.shutdown()
-        server.server_close()
 
 
 @contextlib.contextmanager

@@ -13,13 +13,10 @@ category; a test asserts that a category is empty, a negative control that it is
 from __future__ import annotations
 
 import concurrent.futures
-import contextlib
 import functools
-import http.server
 import json
 import re
 import sys
-import threading
 from dataclasses import dataclass, field
 from html.parser import HTMLParser
 from pathlib import Path
@@ -34,7 +31,7 @@ import build_site  # noqa: E402  (tools/ is not a package)
 
 # One way to start Debian's Chromium and to decide between skipping and failing, shared with the
 # JupyterLab tests.
-from lab_harness import CHROMIUM_ARGS, chromium_path, in_ci  # noqa: E402, F401 (in_ci: conftest)
+from lab_harness import CHROMIUM_ARGS, chromium_path, in_ci, serve  # noqa: E402, F401 (in_ci: conftest)
 
 VIEWPORT = {"width": 1300, "height": 900}
 MAX_SCREENSHOT_HEIGHT = 16000
@@ -76,27 +73,8 @@ def site_unavailable_reason() -> str | None:
 
 
 # ---------------------------------------------------------------------------------------------
-# Local server
+# Pages of a built site (served locally by lab_harness.serve)
 # ---------------------------------------------------------------------------------------------
-class _QuietHandler(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, *args):  # the tests report what matters
-        pass
-
-
-@contextlib.contextmanager
-def serve(folder: Path):
-    """Serve ``folder`` on 127.0.0.1 at a free port; yields the base URL."""
-    handler = functools.partial(_QuietHandler, directory=str(folder))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}"
-    finally:
-        server.shutdown()
-        server.server_close()
-
-
 def list_pages(html_dir: Path) -> list[str]:
     """Every HTML page of a built site, as paths relative to it (sorted)."""
     skip = {"_static", "_sources", "_images", "_modules"}
