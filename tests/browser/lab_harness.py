@@ -349,6 +349,23 @@ def start_lab(workdir: Path, notebooks: Path) -> LabServer:
 # Page-side helpers (installed in every page before JupyterLab loads)
 # ---------------------------------------------------------------------------------------------
 
+# Close every notebook in the main area without the "save your changes?" dialog (the runs
+# leave them modified); true when JupyterLab is there to open the next one.
+CLOSE_NOTEBOOKS = """
+() => {
+  const app = window.jupyterapp;
+  if (!app || !app.shell) return false;
+  for (const widget of Array.from(app.shell.widgets('main'))) {
+    if (widget.context && widget.context.model) widget.context.model.dirty = false;
+    widget.dispose();
+  }
+  return true;
+}
+"""
+OPEN_NOTEBOOK = """
+(path) => { window.jupyterapp.commands.execute('docmanager:open', {path}); return 1; }
+"""
+
 PAGE_HELPERS = r"""
 window.__plab = {
   panel(path) {
@@ -535,10 +552,13 @@ class NotebookRun:
 
 
 class NotebookRunner:
-    """Opens notebooks one at a time, each in a new page, and runs all their cells once.
+    """Opens notebooks one at a time and runs all their cells once.
 
     JupyterLab and Chromium are started on the first ``get`` (inside a test, so that a missing
     browser under ``CI=true`` is reported as that test's failure) and stopped by ``close``.
+    The first notebook opens JupyterLab in a page; each next one opens in the same page once
+    the previous is closed and its kernel shut down (JupyterLab's front end takes seconds to
+    start, once per page). A page that crashed or closed is replaced by a new one.
     """
 
     def __init__(self, make_workdir):
@@ -596,14 +616,14 @@ class NotebookRunner:
         if self.current is not None and self.current.name == name:
             return self.current
         self.start()
-        self.close_current()
-        page = self.context.new_page()
+        page = self._close_notebook_keep_page()
+        if page is None:
+            page = self.context.new_page()
+            # Errors are the current notebook's: the page outlives each run.
+            page.on("console", lambda msg: self._console_error(msg.text) if msg.type == "error"
+                    else None)
+            page.on("pageerror", lambda exc: self._console_error(f"page error: {exc}"))
         run = NotebookRun(name=name, page=page)
-        page.on(
-            "console",
-            lambda msg: run.console_errors.append(msg.text[:300]) if msg.type == "error" else None,
-        )
-        page.on("pageerror", lambda exc: run.console_errors.append(f"page error: {exc}"[:300]))
         self.current = run
         try:
             self._open_and_run(run)
@@ -611,6 +631,27 @@ class NotebookRunner:
             self._screenshot(run)
             record_timing(run)
         return run
+
+    def _console_error(self, text: str) -> None:
+        if self.current is not None:
+            self.current.console_errors.append(text[:300])
+
+    def _close_notebook_keep_page(self):
+        """Close the current notebook and shut its kernel down; return its page for the next
+        notebook, or None when there is none or it cannot be used (then it is closed)."""
+        if self.current is None:
+            return None
+        run, self.current = self.current, None
+        page = None
+        with contextlib.suppress(Exception):
+            if not run.page.is_closed() and run.page.evaluate(CLOSE_NOTEBOOKS):
+                page = run.page
+        if page is None:
+            with contextlib.suppress(Exception):
+                run.page.close()
+        if self.server is not None:
+            self.server.shutdown_kernels_of(run.name)
+        return page
 
     def close_current(self) -> None:
         if self.current is None:
@@ -655,8 +696,12 @@ class NotebookRunner:
 
     def _open_and_run(self, run: NotebookRun) -> None:
         page = run.page
-        page.goto(f"{self.server.url}/lab/tree/{quote(run.name)}?reset")
-        page.wait_for_function("() => window.jupyterapp && window.jupyterapp.shell", timeout=90_000)
+        if page.evaluate("() => !!(window.jupyterapp && window.jupyterapp.shell)"):
+            page.evaluate(OPEN_NOTEBOOK, run.name)
+        else:
+            page.goto(f"{self.server.url}/lab/tree/{quote(run.name)}?reset")
+            page.wait_for_function("() => window.jupyterapp && window.jupyterapp.shell",
+                                   timeout=90_000)
         try:
             self.wait_idle(run, timeout=120)
         except TimeoutError as exc:

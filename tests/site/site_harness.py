@@ -35,6 +35,10 @@ from lab_harness import CHROMIUM_ARGS, chromium_path, in_ci, serve  # noqa: E402
 
 VIEWPORT = {"width": 1300, "height": 900}
 MAX_SCREENSHOT_HEIGHT = 16000
+#: Screenshots after the first mode show the page's top only: enough to see the theme applied
+#: (every page's colours are checked from the DOM in each mode); a whole tall page costs about
+#: a second of Chromium's time per page.
+LATER_MODES_SCREENSHOT_HEIGHT = 2 * 900
 MODES = ("light", "dark")
 PLAY_SECONDS = 1.5
 
@@ -281,7 +285,8 @@ def crawl(
     The pages of ``first_mode_only`` are opened in the first mode only, without a screenshot.
 
     Requests to any host other than the local server are recorded and blocked. Animations are
-    played in the first mode only. Screenshots (whole page, at most 16000 px tall) go to
+    played in the first mode only. Screenshots (whole page, at most 16000 px tall, in the
+    later modes the top two screens) go to
     ``screenshots/MODE/PAGE.png`` when a folder is given. The modes run side by side, each in
     a thread with its own Playwright and Chromium (Playwright's rule: one instance per thread);
     the time goes into Chromium's rendering and screenshots, one core per browser.
@@ -290,7 +295,8 @@ def crawl(
     skipped = set(first_mode_only)
     jobs = [
         (html_dir, pages if mode == modes[0] else [p for p in pages if p not in skipped], mode,
-         screenshots, play_animations and mode == modes[0], skipped)
+         screenshots, play_animations and mode == modes[0], skipped,
+         MAX_SCREENSHOT_HEIGHT if mode == modes[0] else LATER_MODES_SCREENSHOT_HEIGHT)
         for mode in modes
     ]
     if len(jobs) == 1:
@@ -300,7 +306,8 @@ def crawl(
     return [report for result in results for report in result]
 
 
-def _crawl_mode(html_dir, pages, mode, screenshots, play, unshot=()) -> list[PageReport]:
+def _crawl_mode(html_dir, pages, mode, screenshots, play, unshot=(),
+                shot_height=MAX_SCREENSHOT_HEIGHT) -> list[PageReport]:
     from playwright.sync_api import sync_playwright
 
     reports = []
@@ -314,7 +321,7 @@ def _crawl_mode(html_dir, pages, mode, screenshots, play, unshot=()) -> list[Pag
             )
             for page_path in pages:
                 shots = None if page_path in unshot else screenshots
-                report = _visit(context, base, page_path, mode, shots, play)
+                report = _visit(context, base, page_path, mode, shots, play, shot_height)
                 if play:
                     report.embedded_animations = embedded_animations(html_dir / page_path)
                 reports.append(report)
@@ -324,7 +331,8 @@ def _crawl_mode(html_dir, pages, mode, screenshots, play, unshot=()) -> list[Pag
     return reports
 
 
-def _visit(context, base: str, page_path: str, mode: str, screenshots, play: bool) -> PageReport:
+def _visit(context, base: str, page_path: str, mode: str, screenshots, play: bool,
+           shot_height: int = MAX_SCREENSHOT_HEIGHT) -> PageReport:
     report = PageReport(page_path, mode)
     local = urlsplit(base).netloc
     page = context.new_page()
@@ -366,7 +374,7 @@ def _visit(context, base: str, page_path: str, mode: str, screenshots, play: boo
         if screenshots is not None:
             path = Path(screenshots) / mode / _screenshot_name(page_path)
             path.parent.mkdir(parents=True, exist_ok=True)
-            height = min(found["height"], MAX_SCREENSHOT_HEIGHT)
+            height = min(found["height"], shot_height)
             clip = {"x": 0, "y": 0, "width": VIEWPORT["width"], "height": height}
             page.screenshot(path=str(path), full_page=True, clip=clip)
             report.screenshot = str(path)
