@@ -4,8 +4,8 @@ The suite's time goes mostly to running notebooks and building environments: the
 run every notebook in JupyterLab, the website build runs them again, the Binder environment runs
 them under nbval, the install tests build a student's environment, the floors run the unit suite
 under the oldest supported versions. Each job is one process mostly waiting on a kernel or an
-installer, so on a machine with two cores the jobs run two at a time, longest first, and each
-core that a job leaves takes the next job of the queue. Each job's output is printed when it
+installer, so on a machine with two cores the jobs run two at a time, the longest first, and
+each core that a job leaves takes the next job of the queue. Each job's output is printed when it
 ends; the run fails if any job fails.
 
 * ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
@@ -19,6 +19,9 @@ ends; the run fails if any job fails.
 * ``floors`` (with ``--floors PYTHON``): the unit suite (what ``make check`` runs) under the
   interpreter of the environment with the oldest supported versions pinned (``make
   test-floors``), with its own kernel caches (compiled code differs between library versions).
+  It starts last and spreads its tests over as many processes as the queue has workers
+  (pytest-xdist): a queue of whole jobs ends with one core idle while the last job runs, and
+  the floors' many small tests are the work that can fill both.
 
 Servers pick free ports and environments live in folders of their own, so jobs never compete
 for a port or a folder. With one core (or ``--serial``) it runs a single pytest over everything,
@@ -45,20 +48,22 @@ CORE = ["src", "tests"] + [f"--ignore={path}" for path in ELSEWHERE]
 #: installs or the graded assignments.
 UNIT_SUITE = ["src", "tests"] + [f"--ignore={path}"
                                  for path in [*ELSEWHERE, "tests/assignments"]]
-#: The order jobs start in: the longest first (measured on a clean clone, see docs/testing.md),
-#: so that the last to start are the shortest.
-ORDER = ["browser", "core", "floors", "environments"]
+#: The order jobs start in: the longest first (measured on a clean clone, see docs/testing.md);
+#: the floors last, whatever their length, as they alone can use two cores.
+ORDER = ["browser", "core", "environments", "floors"]
 
 
-def floors_job(python: str, extra: list[str]) -> tuple[list[str], dict]:
-    """The command and environment of the unit suite in the floor environment."""
+def floors_job(python: str, extra: list[str], processes: int = 1) -> tuple[list[str], dict]:
+    """The command and environment of the unit suite in the floor environment, its tests
+    spread over ``processes`` (more than one: pytest-xdist, the test extra's)."""
     caches = ROOT / ".venv-floors-caches"
     env = {**os.environ, "PENDULUM_LAB_CACHE": str(caches / "kernels"),
            "NUMBA_CACHE_DIR": str(caches / "numba")}
     # The benchmark items' smoke runs check the benchmark harness, which the main environment
     # tests; at the floors they would repeat the library's runs that the unit tests make.
+    spread = ["-n", str(processes)] if processes > 1 else []
     command = [python, "-m", "pytest", "-o", "cache_dir=.pytest_cache/floors", *UNIT_SUITE,
-               "--ignore=tests/benchmarks", *extra]
+               "--ignore=tests/benchmarks", *spread, *extra]
     return command, env
 
 
@@ -79,7 +84,7 @@ def run_queue(extra: list[str], floors: str | None, workers: int = 2) -> int:
     jobs = {"core": pytest_job("core", CORE, extra)}
     jobs.update({name: pytest_job(name, folders, extra) for name, folders in FOLDERS.items()})
     if floors is not None:
-        jobs["floors"] = floors_job(floors, extra)
+        jobs["floors"] = floors_job(floors, extra, processes=workers)
     waiting = [(name, *jobs[name]) for name in ORDER if name in jobs]
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as logs:
