@@ -775,9 +775,19 @@ class NotebookRunner:
         run.problems.extend(problems)
 
     def _screenshot(self, run: NotebookRun) -> None:
+        """The notebook's first screen after a clean run; the whole notebook after a run with
+        problems, to see them (a whole notebook costs Chromium seconds; the website's
+        screenshots show every notebook whole)."""
         page = run.page
         SCREENSHOTS.mkdir(parents=True, exist_ok=True)
         target = SCREENSHOTS / f"{Path(run.name).stem}.png"
+        if run.ok:
+            try:
+                page.screenshot(path=str(target))
+                run.screenshot = target
+            except Exception as exc:  # a screenshot must never hide the real result
+                run.problems.append(f"screenshot failed: {exc}")
+            return
         try:
             height = page.evaluate("(p) => window.__plab.contentHeight(p)", run.name) or 0
             height = int(min(max(height + 40, VIEWPORT["height"]), MAX_SCREENSHOT_HEIGHT))

@@ -28,8 +28,9 @@ together with the slider it is linked to. Sliders are changed through their valu
 select all, type, Enter), so keep ``readout=True`` on the sliders to be tested.
 
 Artifacts (``test-artifacts/`` is git-ignored): ``test-artifacts/browser/screenshots/NAME.png``
-(whole notebook after run-all), ``NAME.slider-before.png`` / ``-after`` and the like for each
-interaction, and ``test-artifacts/browser/timings.json`` with the run-all wall time per notebook.
+(after run-all: the first screen, the whole notebook when the run had problems),
+``NAME.slider-before.png`` / ``-after`` and the like for each interaction, and
+``test-artifacts/browser/timings.json`` with the run-all wall time per notebook.
 """
 
 from __future__ import annotations
