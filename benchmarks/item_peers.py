@@ -48,7 +48,7 @@ OURS = ("glrk8", "glrk12", "glrk16")
 #: Our composition methods and pyhamsys' names of the same schemes (its ``Yo4`` is Yoshida's
 #: triple jump, ``Yos6`` his solution A, ``M4`` McLachlan's, ``PEFRL`` Omelyan's).
 PYHAMSYS_SCHEMES = {"yoshida4": "Yo4", "yoshida6": "Yos6", "mclachlan4": "M4",
-                    "omelyan4": "PEFRL"}
+                    "omelyan4": "PEFRL", "blanes_moan4": "BM4"}
 
 
 def _our_runner(dp, theta0, omega0):

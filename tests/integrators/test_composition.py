@@ -14,8 +14,9 @@ JUMP = 2 ** (1 / 3)
 TRIPLE_JUMP = (1 / (2 - JUMP), -JUMP / (2 - JUMP), 1 / (2 - JUMP))
 
 
-def test_the_registry_holds_the_five_schemes():
-    assert set(COMPOSITIONS) >= {"yoshida4", "yoshida6", "suzuki4", "mclachlan4", "omelyan4"}
+def test_the_registry_holds_the_six_schemes():
+    assert set(COMPOSITIONS) >= {"yoshida4", "yoshida6", "suzuki4", "mclachlan4", "omelyan4",
+                                 "blanes_moan4"}
     for name in COMPOSITIONS:
         method = get_method(name)
         assert method.symplectic and method.symmetric and method.order % 2 == 0
@@ -87,6 +88,22 @@ def test_omelyan_is_the_pefrl_splitting_on_a_separable_hamiltonian():
     assert np.max(np.abs(np.concatenate([q1 - q_kick, p1 - p_kick]))) > 1e-4
     kinds = [kind for kind, _ in get_method("omelyan4").composition.substeps]
     assert kinds[:2] == [ADJOINT, EULER] and LEAPFROG not in kinds
+
+
+def test_blanes_moan_is_their_six_stage_splitting_on_a_separable_hamiltonian():
+    # the published coefficients of S6 (J. Comput. Appl. Math. 142 (2002) 313-330, Table 2)
+    a1, a2, a3 = 0.0792036964311957, 0.353172906049774, -0.0420650803577195
+    b1, b2 = 0.209515106613362, -0.143851773179818
+    a4, b3 = 1 - 2 * (a1 + a2 + a3), 0.5 - (b1 + b2)
+    s6 = [a1, b1, a2, b2, a3, b3, a4, b3, a3, b2, a2, b1, a1]
+    sp = pl.simple_pendulum(mass=1.0, length=1.0, g=9.81)
+    q, p, h = np.array([1.1]), np.array([0.4]), 0.3
+    q1, p1 = pl.step(sp, q, p0=p, dt=h, method="blanes_moan4")
+    q_ref, p_ref = splitting(q, p, h, s6)
+    assert np.max(np.abs(np.concatenate([q1 - q_ref, p1 - p_ref]))) < 1e-14
+    # negative control: a2 and b1 exchanged is another method
+    q_swap, p_swap = splitting(q, p, h, [a1, a2, b1, *s6[3:-3], b1, a2, a1])
+    assert np.max(np.abs(np.concatenate([q1 - q_swap, p1 - p_swap]))) > 1e-4
 
 
 def test_method_source_lists_the_substeps_and_the_source():

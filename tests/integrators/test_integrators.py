@@ -105,6 +105,9 @@ def sp_reference():
 
 
 ORDER_DTS = (0.01, 0.005, 0.0025, 0.00125)
+# Order 4 stops a step earlier: the optimised compositions have error constants small enough
+# that at 0.00125 their error (1e-13) meets the reference's and bends the fit.
+ORDER4_DTS = ORDER_DTS[:3]
 # Order 8 reaches round-off fast: larger steps, and a gentler start for the
 # double pendulum so that these steps are in the asymptotic regime.
 ORDER8_DTS = (0.125, 0.1, 0.0625, 0.05)
@@ -118,8 +121,10 @@ def order_setup(order: int, pendulum: str):
     swings. An order with no setup fails the test, asking for one.
     """
     double = pendulum == "double"
-    if order <= 4:
+    if order < 4:
         return ([0.8, 1.2] if double else [1.2]), 1.0, ORDER_DTS, 0.15, 0.0
+    if order == 4:
+        return ([0.8, 1.2] if double else [1.2]), 1.0, ORDER4_DTS, 0.15, 1e-13
     if order == 6:  # Yoshida's weights are large: steps of 0.05 are still asymptotic
         return ([0.8, 1.2] if double else [1.2]), 1.0, (0.05, 0.04, 0.025, 0.02), 0.15, 1e-13
     if order == 8:

@@ -29,8 +29,9 @@ __all__ = [
 ]
 
 #: Step sizes of an order fit: in the asymptotic regime on the double pendulum
-#: (``dt <= 0.025``) and well above round-off for the fourth-order methods over
-#: one second.
+#: (``dt <= 0.025``) and well above round-off for the fourth-order Runge-Kutta methods
+#: over one second. The optimised compositions are more accurate: ``blanes_moan4`` is at
+#: 1e-13 at the smallest step, the reference's level, so fit it on the first three.
 ORDER_DTS = (0.01, 0.005, 0.0025, 0.00125)
 #: The same for eighth-order methods, whose errors at ORDER_DTS are round-off:
 #: on the simple pendulum from 2 rad they run from 3e-9 down to 2e-12.

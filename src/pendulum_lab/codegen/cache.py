@@ -70,7 +70,6 @@ import importlib.util
 import inspect
 import linecache
 import os
-import pickle
 import platform
 import sys
 import threading
@@ -81,13 +80,9 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-import numba
 import numpy as np
-from numba.core import caching as numba_caching
-from numba.core import compiler as numba_compiler
-from numba.core import dispatcher as numba_dispatcher
 
-from . import compile_status
+from . import compile_status, numba_cache
 from .compile_status import compiling
 
 __all__ = [
@@ -299,7 +294,7 @@ def module_dependencies(modules) -> list[str]:
 
 def _versions() -> str:
     return (f"python {platform.python_version()} numpy {np.__version__} numba "
-            f"{numba.__version__} llvmlite {importlib.metadata.version('llvmlite')}")
+            f"{numba_cache.NUMBA_VERSION} llvmlite {importlib.metadata.version('llvmlite')}")
 
 
 def _value_fingerprint(value) -> str:
@@ -488,44 +483,34 @@ def file_lock(path: Path):
 
 
 # ------------------------------------------------------------------------- Numba's files
-class _Damaged(Exception):
-    """A cache file that cannot be read back; the message says why."""
+class KernelCache(numba_cache.DispatcherCache):
+    """The disk cache of one function, over the layers of :func:`cache_layers`.
 
-
-class KernelCache(numba_caching.Cache):
-    """Numba's disk cache of one function, over the layers of :func:`cache_layers`.
-
-    A compiled version is loaded from the first layer that holds it and saved into the
-    user's writable layer only (nowhere when there is none: it stays in memory). Its files
-    are Numba's own (an index ``<base>.nbi`` and data files ``<base>.<k>.nbc``, in
-    ``<layer>/kernels/__pycache__``), written by Numba's code; reading them back is done
-    here, so that a file that cannot be read is told apart from a missing one and set aside
-    (:func:`_set_aside`). Every load and every compilation is told to
+    A compiled version is loaded from the first layer that holds it. It is saved into the
+    user's writable layer only, and nowhere when there is none (it stays in memory). The files
+    are Numba's own, in ``<layer>/kernels/__pycache__``, read and written through
+    :mod:`~pendulum_lab.codegen.numba_cache`. A file that cannot be read is told apart from a
+    missing one and set aside (:func:`_set_aside`). Every load and every compilation is told to
     :mod:`~pendulum_lab.codegen.compile_status`, so that a compilation is reported as a load
     only when nothing was compiled.
 
-    ``<base>`` is Numba's file name of the function (``<file stem>.<name>-<line>.py<version>``);
-    for a function of a package module the stem is the module's name and :func:`code_key`
-    of its code, so that a change in any module it imports gives new files.
+    For a function of a package module the file names carry the module's name and
+    :func:`code_key` of its code, so that a change in any module it imports gives new files.
+    A generated module's name already holds its key.
     """
 
-    def __init__(self, py_func):  # noqa: D107 (Numba's constructor needs a writable folder)
-        self._name = repr(py_func)
-        self._py_func = py_func
+    def __init__(self, py_func):  # noqa: D107
+        super().__init__(py_func)
         self._identity = None
-        self.enable()
 
     @property
     def cache_path(self) -> str:
         folder = cache_layers().write
         return str(folder / "__pycache__") if folder is not None else "(in memory)"
 
-    def flush(self) -> None:
-        """Nothing to drop: a stale file never matches (its name or stamp differs)."""
-
     def _base_and_stamp(self) -> tuple[str, bytes] | None:
-        """Numba's file name base of the function and the stamp of its source; None when
-        the function has no source to key it on (then it is not cached)."""
+        """The function's file name base and the stamp of its source. None when the function
+        has no source to key it on (then it is not cached)."""
         if self._identity is None:
             function = self._py_func
             module = function.__module__
@@ -542,33 +527,31 @@ class KernelCache(numba_caching.Cache):
                 stem = module.removeprefix(MODULE_PREFIX)
             else:
                 stem = f"{module}-{_module_key(module, source)}"
-            qualname = function.__qualname__.replace("<", "").replace(">", "")
-            base = (f"{stem}.{qualname}-{function.__code__.co_firstlineno}.py"
-                    f"{sys.version_info[0]}{sys.version_info[1]}{getattr(sys, 'abiflags', '')}")
-            self._identity = (base, hashlib.sha256(source.encode()).digest())
+            self._identity = (numba_cache.index_name(stem, function),
+                              hashlib.sha256(source.encode()).digest())
         return self._identity or None
 
-    def _load_overload(self, sig, target_context):
-        identity = self._base_and_stamp() if self._enabled else None
+    def load(self, key, read):
+        """The first layer's compiled version for ``key``, or None (Numba compiles it)."""
+        identity = self._base_and_stamp() if key is not None else None
         if identity is not None:
             base, stamp = identity
-            key = self._index_key(sig, target_context.codegen())
             layers = cache_layers()
             for folder in layers.read:
-                result = self._load_from(folder / "__pycache__", base, stamp, key,
-                                         target_context, writable=folder == layers.write)
+                result = self._load_from(folder / "__pycache__", base, stamp, key, read,
+                                         writable=folder == layers.write)
                 if result is not None:
                     compile_status.count_load()
                     return result
         compile_status.count_compilation()  # Numba compiles it next
         return None
 
-    def _load_from(self, folder: Path, base: str, stamp: bytes, key, target_context,
-                   writable: bool):
+    @staticmethod
+    def _load_from(folder: Path, base: str, stamp: bytes, key, read, writable: bool):
         index = folder / f"{base}.nbi"
         try:
-            overloads = _read_index(index, stamp)
-        except _Damaged as damage:
+            overloads = numba_cache.read_index(index, stamp)
+        except numba_cache.DamagedFile as damage:
             _set_aside(index, str(damage), writable)
             return None
         name = overloads.get(key)
@@ -576,41 +559,33 @@ class KernelCache(numba_caching.Cache):
             return None
         data = folder / name
         try:
-            payload = pickle.loads(data.read_bytes())
+            return read(data)
         except FileNotFoundError:
             return None  # set aside, or replaced, by another process a moment ago
-        except Exception as err:  # noqa: BLE001 (any way of failing to read it back)
-            _set_aside(data, f"unreadable: {type(err).__name__}: {err}", writable)
-            return None
-        try:
-            return numba_compiler.CompileResult._rebuild(target_context, *payload)
-        except Exception as err:  # noqa: BLE001
-            _set_aside(data, f"cannot be rebuilt: {type(err).__name__}: {err}", writable)
+        except numba_cache.DamagedFile as damage:
+            _set_aside(data, str(damage), writable)
             return None
 
-    def _save_overload(self, sig, data):
-        if not self._enabled:
-            return
+    def save(self, key, write) -> None:
+        """Add the compiled version to the user's layer, if there is one."""
         identity = self._base_and_stamp()
         folder = cache_layers().write
-        if identity is None or folder is None or not _cachable(data):
+        if identity is None or folder is None:
             return
         base, stamp = identity
         folder = folder / "__pycache__"
-        key = self._index_key(sig, data.codegen)
-        payload = data._reduce()
         try:
             folder.mkdir(parents=True, exist_ok=True)
             # the index is read, extended and written again: one process at a time
             with file_lock(folder / "index.lock"):
                 index = folder / f"{base}.nbi"
                 try:
-                    _read_index(index, stamp)
-                except _Damaged as damage:
+                    numba_cache.read_index(index, stamp)
+                except numba_cache.DamagedFile as damage:
                     _set_aside(index, str(damage), True)
                     if index.exists():  # could not be set aside (open elsewhere, on Windows)
                         return
-                numba_caching.IndexDataCacheFile(str(folder), base, stamp).save(key, payload)
+                write(folder, base, stamp)
         except OSError as err:  # full, or no longer writable: the kernel stays in memory
             compile_status.count_unsaved()
             _warn_once(f"cannot save a compiled kernel into {folder} "
@@ -618,45 +593,15 @@ class KernelCache(numba_caching.Cache):
                        f"Set {CACHE_VARIABLE} to a writable folder to keep it.")
 
 
-def _read_index(path: Path, stamp: bytes) -> dict:
-    """The overloads an index file lists (``{}`` if there is none), read as Numba writes it:
-    Numba's version, then the pickled ``(stamp, overloads)``."""
-    try:
-        with open(path, "rb") as handle:
-            try:
-                version = pickle.load(handle)
-                rest = handle.read()
-            except Exception as err:  # noqa: BLE001 (truncated, garbage)
-                raise _Damaged(f"unreadable: {type(err).__name__}: {err}") from None
-    except FileNotFoundError:
-        return {}
-    if version != numba.__version__:
-        raise _Damaged(f"written by Numba {version}, this is Numba {numba.__version__}")
-    try:
-        found, overloads = pickle.loads(rest)
-    except Exception as err:  # noqa: BLE001
-        raise _Damaged(f"unreadable: {type(err).__name__}: {err}") from None
-    if found != stamp or not isinstance(overloads, dict):
-        raise _Damaged("written for another source")
-    return overloads
-
-
-def _cachable(result) -> bool:
-    """Whether Numba could save this compiled version (as its ``check_cachable``)."""
-    if any(not lifted.can_cache for lifted in result.lifted):
-        return False
-    return not result.library.has_dynamic_globals
-
-
 def cached_njit(signature=None, **options):
-    """``numba.njit`` with the package's disk cache (:class:`KernelCache`): the one way the
-    package caches a kernel, in its modules and in generated code.
+    """``numba.njit`` with the package's disk cache (:class:`KernelCache`).
 
-    ``@cached_njit`` compiles on first use; ``@cached_njit(signature)`` compiles (or loads)
-    when the decorator runs and accepts only that signature, as ``numba.njit(signature)``
-    does, so a package module gives no signature (nothing compiles at import) and
-    generated code does (its kernels compile while :func:`load_generated` runs it).
-    ``options`` are ``numba.njit``'s (``error_model``, ``nogil``, ...), not ``cache``.
+    It is the one way the package caches a kernel, in its modules and in generated code.
+    ``@cached_njit`` compiles on first use. ``@cached_njit(signature)`` compiles (or loads)
+    when the decorator runs and then accepts only that signature, as ``numba.njit(signature)``
+    does. So a package module gives no signature (nothing compiles at import), and generated
+    code does (its kernels compile while :func:`load_generated` runs it). ``options`` are
+    ``numba.njit``'s (``error_model``, ``nogil``, ...), not ``cache``.
     """
     if inspect.isfunction(signature) and not options:  # used bare: @cached_njit
         return cached_njit()(signature)
@@ -664,18 +609,9 @@ def cached_njit(signature=None, **options):
         raise TypeError("cached_njit caches always; do not pass `cache`")
 
     def decorate(function):
-        dispatcher = numba.njit(**options)(function)
-        if not isinstance(dispatcher, numba_dispatcher.Dispatcher):
-            return dispatcher  # NUMBA_DISABLE_JIT=1: the plain Python function
-        # what ``Dispatcher.enable_caching`` sets, with the layered cache instead of Numba's
-        dispatcher._cache = KernelCache(function)
-        if signature is not None:
-            from numba.core import typeinfer
-
-            with typeinfer.register_dispatcher(dispatcher):
-                dispatcher.compile(signature)
-            dispatcher.disable_compile()
-        return dispatcher
+        # the class is looked up when the decorator runs (a test swaps in Numba's own)
+        return numba_cache.jit_with_cache(function, lambda f: KernelCache(f), signature,
+                                          options)
 
     return decorate
 

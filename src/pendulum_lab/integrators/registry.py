@@ -52,6 +52,27 @@ _MCLACHLAN4 = ((14 - 19 ** 0.5) / 108, (146 + 5 * 19 ** 0.5) / 540, (-23 - 20 * 
 _XI, _LAMBDA, _CHI = 0.1786178958448091, -0.2123418310626054, -0.06626458266981849
 _OMELYAN4 = (_XI, 0.5 - _LAMBDA - _XI, _LAMBDA + _XI + _CHI - 0.5, 0.5 - _CHI - _XI)
 
+
+def _substeps_meeting_at(flows):
+    """Substep weights ``w`` with ``w_1 = flows[0]`` and ``w_k + w_(k-1) = flows[k-1]``.
+
+    A splitting method's drifts and kicks are sums of neighbouring substeps of symplectic
+    Euler and its adjoint, so this turns the first half of a splitting into substeps.
+    """
+    weights = [flows[0]]
+    for flow in flows[1:]:
+        weights.append(flow - weights[-1])
+    return tuple(weights)
+
+
+# Blanes and Moan's six-stage splitting of order 4 (their Table 2, S6, as published):
+# drifts a1 a2 a3 a4 a3 a2 a1 between kicks b1 b2 b3 b3 b2 b1, a4 = 1 - 2 (a1 + a2 + a3),
+# b3 = 1/2 - (b1 + b2). It begins with a drift: adjoint, Euler, adjoint, ... substeps.
+_BM_A1, _BM_A2, _BM_A3 = 0.0792036964311957, 0.353172906049774, -0.0420650803577195
+_BM_B1, _BM_B2 = 0.209515106613362, -0.143851773179818
+_BLANES_MOAN4 = _substeps_meeting_at(
+    (_BM_A1, _BM_B1, _BM_A2, _BM_B2, _BM_A3, 0.5 - _BM_B1 - _BM_B2))
+
 _REGISTRY = [
     # Its reference step is the formula itself, not the one-stage stage loop.
     Method.from_tableau("explicit_euler", ButcherTableau(a=[[0.0]], b=[1.0]),
@@ -136,6 +157,14 @@ _REGISTRY = [
                "lambda, chi to the 16 digits published there"),
         "Omelyan-Mryglod-Folk's optimised order-4 splitting (PEFRL): drifts and kicks as "
         "symplectic Euler and its adjoint"),
+    Method.from_composition("blanes_moan4", Composition(
+        [*_BLANES_MOAN4, *_BLANES_MOAN4[::-1]], order=4, base="symplectic_euler",
+        adjoint_first=True,
+        source="S. Blanes, P. C. Moan, J. Comput. Appl. Math. 142 (2002) 313-330: the "
+               "six-stage symmetric splitting of order 4 for separable problems (S6), its a1, "
+               "a2, a3, b1, b2 to the 15 digits published there"),
+        "Blanes-Moan's optimised order-4 splitting (six force evaluations): drifts and kicks "
+        "as symplectic Euler and its adjoint"),
 ]
 #: The methods for Hamiltonian systems, compared throughout the course.
 METHODS: dict[str, Method] = {
