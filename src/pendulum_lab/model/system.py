@@ -382,7 +382,8 @@ class SystemModel(PendulumModel):
 
     def place_point(self, point: int, x: float, y: float, theta, t: float = 0.0) -> np.ndarray:
         """The coordinates nearest ``theta`` that put point ``point`` at ``(x, y)`` [m] at
-        time ``t``.
+        time ``t``; for points in space, its horizontal position ``(x, y)`` (where a view from
+        above shows it: the height follows from the coordinates).
 
         Damped Gauss-Newton (Levenberg-Marquardt) on the point's position from ``theta``:
         where the point's position fixes the coordinates (the elastic pendulum's bob), it
@@ -398,10 +399,6 @@ class SystemModel(PendulumModel):
             singular mass matrix, such as ``r = 0`` of polar coordinates).
         """
         drawing = self.drawing
-        if self.dimensions != 2:
-            raise ValueError(f"{self.system.name} moves in space: a point placed at (x, y) on "
-                             "a flat picture does not fix its height, so dragging cannot set "
-                             "its coordinates; give them as numbers (`theta`) instead")
         point = check.index_below("point", point, len(drawing.masses))
         if drawing.movable[point] is not None:
             raise ValueError(drawing.movable[point])
@@ -410,7 +407,8 @@ class SystemModel(PendulumModel):
         t = check.real_number("t", t)
 
         def place(coordinates):
-            xs, ys = self.positions(coordinates, t)
+            with np.errstate(invalid="ignore"):  # a height beyond reach: refused below
+                xs, ys = self.positions(coordinates, t)[:2]
             return np.array([xs[point], ys[point]])
 
         def jacobian(coordinates):
@@ -441,6 +439,15 @@ class SystemModel(PendulumModel):
                 1.0, np.max(np.abs(matrix)) ** self.n):
             raise ValueError(f"at ({x:.3g}, {y:.3g}) m the coordinates of {self.system.name} "
                              "fail (its mass matrix is singular there): release it elsewhere")
+        # Beyond a rod's reach a point in space has no height (a square root of a negative
+        # number): refused, not run with NaN positions and an indefinite mass matrix.
+        with np.errstate(invalid="ignore"):
+            placed = np.concatenate(self.positions(q, t))
+        if not np.all(np.isfinite(placed)) or np.min(
+                np.linalg.eigvalsh(matrix)) <= 0:
+            raise ValueError(f"point {point} of {self.system.name} cannot be at ({x:.3g}, "
+                             f"{y:.3g}) m: its rods do not reach there; release it nearer the "
+                             "pivot")
         return q
 
     def __repr__(self) -> str:

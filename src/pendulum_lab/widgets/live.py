@@ -95,7 +95,8 @@ def run_messages(
        float64 before the cast (float32 energies would hide errors below
        about 1e-6 J);
     3. for a system given by its points (not a chain), the points' positions,
-       shape ``(count, points, 2)`` [m]: the browser cannot compute them.
+       shape ``(count, points, 2)`` [m], ``(count, points, 3)`` for points in space
+       (``figure["dimensions"]``): the browser cannot compute them.
 
     ``content`` says where the chunk goes (``run``, ``chunk`` of ``chunks``,
     ``first`` state, ``count``, ``chunk_states``) and repeats what the drawing needs: ``links``
@@ -436,11 +437,6 @@ def live_simulator(
     >>> sim.trajectory.theta[0].round(4).tolist(), sim.trajectory.omega[0].tolist()
     ([1.5708, 2.5], [0.0, 0.0])
     """
-    if getattr(model, "dimensions", 2) != 2:
-        raise ValueError(
-            f"{model.name} moves in space, and the live simulator draws a plane: use "
-            "pl.animation.simulator(model) or pl.animation.html_animation(run, model), which "
-            "draw it from above and from the side")
     return build_simulator(
         LiveSimulator, model, theta0, omega0, t_end=t_end, dt=dt, method=method, speed=speed,
         trail=trail,
