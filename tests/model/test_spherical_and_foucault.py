@@ -115,13 +115,15 @@ def test_the_poles_and_numpy_numbers_are_latitudes_and_other_arguments_are_check
         pl.spherical_pendulum(mass=-1.0)
 
 
-def test_a_point_in_space_cannot_be_placed_by_a_drag(spherical):
-    with pytest.raises(ValueError, match="moves in space: a point placed at \\(x, y\\)"):
-        spherical.place_point(0, 0.3, -0.9, [0.0, 0.0])
-    assert spherical.positions([0.6, 0.0])[2][0] == pytest.approx(-0.8)  # z from the rod
-    # negative control: a planar system's point is placed
-    assert pl.elastic_pendulum().place_point(0, 0.0, -1.0, [1.0, 0.3]) == pytest.approx(
-        [1.0, 0.0], abs=1e-6)
+def test_a_point_in_space_is_placed_by_its_horizontal_position_within_reach(spherical):
+    """What a drag seen from above sets: the bob's (x, y); its height follows from the rod."""
+    placed = spherical.place_point(0, 0.3, -0.4, [0.1, 0.2])
+    assert placed == pytest.approx([0.3, -0.4], abs=1e-9)
+    assert spherical.positions(placed)[2][0] == pytest.approx(-np.sqrt(1 - 0.25))
+    # negative control: beyond the rod's reach there is no height, and no silent NaN run
+    with pytest.raises(ValueError, match="point 0 of the spherical pendulum cannot be at "
+                                         "\\(1.2, 0\\) m: its rods do not reach there"):
+        spherical.place_point(0, 1.2, 0.0, [0.1, 0.2])
 
 
 def test_the_foucault_pendulums_equilibrium_and_its_two_frequencies():
