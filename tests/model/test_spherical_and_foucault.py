@@ -166,3 +166,32 @@ def test_a_bead_on_a_turning_hoop_rises_to_the_angle_the_centrifugal_force_sets(
     assert fast == pytest.approx([-side, 0.0, side], abs=1e-9)
     # negative control: below the threshold only the bottom
     assert [eq.angles for eq in hoop(4.0).equilibria] == [(0.0,)]
+
+
+@pytest.mark.parametrize(("latitude", "error"), [(100, ValueError), (float("nan"), ValueError),
+                                                 ("north", TypeError), (True, TypeError)])
+def test_replace_takes_the_latitude_as_the_factory_does(latitude, error):
+    """In degrees, in [-90, 90], refused with the factory's own sentence."""
+    paris = pl.foucault_pendulum(latitude=48.85)
+    with pytest.raises(error) as by_factory:
+        pl.foucault_pendulum(latitude=latitude)
+    with pytest.raises(error) as by_replace:
+        paris.replace(lat=latitude)
+    assert str(by_replace.value) == str(by_factory.value)
+
+
+def test_replace_family_and_copied_code_keep_the_latitude_in_degrees():
+    paris, equator = pl.foucault_pendulum(latitude=48.85), pl.foucault_pendulum(latitude=45)
+    moved = paris.replace(lat=45)
+    assert list(moved.parameter_values.values()) == list(equator.parameter_values.values())
+    assert paris.family(lat=[0.0, 45.0]).member(1).parameter_values == moved.parameter_values
+    with pytest.raises(ValueError, match="`latitude` must be a number of degrees in "):
+        paris.family(lat=[45.0, 100.0])
+    from pendulum_lab.widgets.calls import model_code
+
+    copied = eval(model_code(moved), {"pl": pl})  # the code an instrument copies
+    assert copied.parameter_values == pytest.approx(moved.parameter_values)
+    # negative control: a number of radians is read as degrees (pi/4 is not 45 degrees)
+    radians = paris.replace(lat=np.pi / 4)
+    assert radians.parameter_values != equator.parameter_values
+    assert list(radians.parameter_values.values())[-1] == pytest.approx(np.radians(np.pi / 4))

@@ -79,6 +79,12 @@ class SystemModel(PendulumModel):
         Its symbolic equations (also ``chain``, the attribute the code generator reads).
     n : int
         Number of generalized coordinates.
+    factory_units : dict of str -> (callable, callable)
+        The parameters its factory takes in another unit than the model holds them (the
+        Foucault pendulum's ``lat``: degrees given, radians held), each with two functions:
+        one checks a value in the factory's unit and turns it into the model's, the other
+        turns a held value back (:meth:`in_factory_units`). :meth:`replace` and
+        :meth:`family` take values in the factory's unit. Empty for most systems.
     """
 
     def __init__(self, system: MechanicalSystem, values: dict | None = None, *,
@@ -112,6 +118,7 @@ class SystemModel(PendulumModel):
         self.start = (np.zeros(self.n) if start is None
                       else check.state_vector("start", start, self.n))
         self.factory = factory
+        self.factory_units = {}
 
     #: Its coordinates may be lengths or positions: never reduced by whole turns.
     periodic_coordinates = False
@@ -208,9 +215,38 @@ class SystemModel(PendulumModel):
         through its sine and cosine): the sliders offer angles in ``[-pi, pi]`` rad."""
         return self.system.angle_coordinates
 
+    def _in_model_units(self, changes: dict, *, arrays: bool = False) -> dict:
+        """``changes`` with the values of :attr:`factory_units` turned into the model's unit
+        (checked as the factory checks them, entry by entry for arrays)."""
+        converted = dict(changes)
+        for name, (convert, _) in self.factory_units.items():
+            if name in changes:
+                value = changes[name]
+                entries = np.ravel(np.asarray(value)).tolist() if arrays else None
+                converted[name] = (np.array([convert(v) for v in entries], dtype=float)
+                                   .reshape(np.shape(value))
+                                   if arrays and np.ndim(value) else convert(value))
+        return converted
+
+    def in_factory_units(self, values: dict) -> dict:
+        """``values`` (``{name: number}`` in the units the model holds, as
+        :attr:`parameter_values` has them) in the units :meth:`replace` takes."""
+        return {name: (self.factory_units[name][1](value) if name in self.factory_units
+                       else value) for name, value in values.items()}
+
     def replace(self, **changes) -> SystemModel:
-        """A copy with some parameter values changed (by name); the period follows them
-        (``pl.kapitza_pendulum().replace(w=50).drive_period`` is ``2 pi / 50``)."""
+        """A copy with some parameter values changed (by name), in the units the factory takes
+        (:attr:`factory_units`); the period follows them
+        (``pl.kapitza_pendulum().replace(w=50).drive_period`` is ``2 pi / 50``).
+
+        Examples
+        --------
+        >>> import math, pendulum_lab as pl
+        >>> turned = pl.foucault_pendulum(latitude=48.85).replace(lat=45)  # degrees, as given
+        >>> math.isclose(turned.parameter_values[turned.system.parameters[-1]], math.pi / 4)
+        True
+        """
+        changes = self._in_model_units(changes)
         clock = set(self.clock_parameters) & set(changes)
         if clock and self._period is not None and not self._period.free_symbols:
             raise ValueError(
@@ -218,9 +254,11 @@ class SystemModel(PendulumModel):
                 f"on the time, but its period was given as the number {self._period_value:g} "
                 "s and no period could be derived from its equations: build it with `period` "
                 "as an expression of the parameters (such as 2*sp.pi/w)")
-        return SystemModel(self.system, dict(zip(map(str, self.system.parameters),
+        copy = SystemModel(self.system, dict(zip(map(str, self.system.parameters),
                                                  self._params)) | changes, period=self._period,
                            start=self.start, factory=self.factory)
+        copy.factory_units = dict(self.factory_units)
+        return copy
 
     @property
     def clock_parameters(self) -> tuple[str, ...]:
@@ -246,13 +284,13 @@ class SystemModel(PendulumModel):
         >>> springs.shape, [round(float(w), 4) for w in springs.member(1).parameter_values.values()]
         ((3,), [1.0, 39.24, 0.75, 9.81])
         """
-        return SystemFamily(self, values)
+        return SystemFamily(self, self._in_model_units(values, arrays=True))
 
     def __reduce__(self):
         return SystemModel, (self.system, dict(zip(map(str, self.system.parameters),
                                                    self._params))), {
             "_period": self._period, "_period_value": self._period_value, "start": self.start,
-            "factory": self.factory}
+            "factory": self.factory, "factory_units": self.factory_units}
 
     @functools.cached_property
     def equilibria(self) -> tuple:
@@ -487,6 +525,7 @@ class SystemFamily(FamilyMembers, SystemModel):
         self.n, self.forced, self._fn = base.n, base.forced, base._fn
         self._period, self._period_value = base._period, base._period_value
         self.start, self.factory = base.start, base.factory
+        self.factory_units = base.factory_units
         defaults = dict(zip(map(str, base.system.parameters), base._params))
         self._params = tuple(np.array(np.broadcast_to(self.values.get(name, value), shape),
                                       dtype=float) for name, value in defaults.items())
@@ -496,6 +535,11 @@ class SystemFamily(FamilyMembers, SystemModel):
     @property
     def shape(self) -> tuple:
         return self._params[0].shape
+
+    def member(self, index) -> SystemModel:
+        """The member at ``index`` (an index into ``shape``) as a model of its own."""
+        held = {k: float(a[index]) for k, a in self.values.items()}
+        return self.base.replace(**self.base.in_factory_units(held))
 
     def _mapped(self, transform) -> SystemFamily:
         return SystemFamily(self.base, {k: transform(a) for k, a in self.values.items()})
@@ -748,7 +792,8 @@ def foucault_pendulum(latitude: float = 48.85, length: float = 1.0, mass: float 
     ----------
     latitude : float
         Degrees in [-90, 90], north positive (the default is Paris, the Panthéon's
-        pendulum). The model's parameter ``lat`` holds it in radians.
+        pendulum). The model's parameter ``lat`` holds it in radians; ``replace(lat=...)`` and
+        ``family(lat=[...])`` take degrees, as here, checked the same way.
     length, mass, g : float
         The rod's length [m], the bob's mass [kg], the local gravity [m/s^2].
     rotation_rate : float
@@ -775,4 +820,11 @@ def foucault_pendulum(latitude: float = 48.85, length: float = 1.0, mass: float 
         name="the Foucault pendulum")
     model = _made_by(model, "foucault_pendulum", start=[0.1 * values[rod], 0.0])
     model.factory = f"pl.foucault_pendulum(latitude={lat_degrees:g})"
+    model.factory_units = {"lat": (_latitude_radians, math.degrees)}
     return model
+
+
+def _latitude_radians(latitude) -> float:
+    """A latitude in degrees, checked as :func:`foucault_pendulum` checks it, in radians (the
+    unit of the model's ``lat``)."""
+    return math.radians(_latitude(latitude))
