@@ -19,6 +19,14 @@ In the browser
     chain follows; on release the kernel restarts the motion from there, at
     rest (:meth:`LiveSimulator.drag`).
 
+A system in space (``model.dimensions == 3``; its points travel as ``(x, y, z)``)
+    is drawn in a projection the student turns: a drag on the picture turns it
+    about the vertical and tilts it; "reset view", "top" and "side" pick one.
+    Only in the top view does dragging a bob set the start, by its horizontal
+    position ``(x, y)`` (kept within 95 % of its distance from the pivot); the
+    release calls :meth:`LiveSimulator.drag` with that ``(x, y)``. Elsewhere a drag
+    turns the view, and the status line says how to set the start.
+
 A description of the state shown (time, kinetic, potential and total
 energy, the energy error) sits in an ARIA live region beside the canvas,
 updated when the state shown changes other than by playing (a step, a
@@ -206,7 +214,8 @@ def released_angles(model: PendulumModel, theta, bob: int, x: float, y: float) -
     bob : int
         Which bob was dragged, ``0 <= bob < n``.
     x, y : float
-        The release point [m], pivot at the origin, ``y`` up.
+        The release point [m], pivot at the origin, ``y`` up; for a system in space its
+        horizontal position (as seen from above, ``z`` up).
 
     Returns
     -------
