@@ -236,16 +236,9 @@ class SystemModel(PendulumModel):
 
     def replace(self, **changes) -> SystemModel:
         """A copy with some parameter values changed (by name), in the units the factory takes
-        (:attr:`factory_units`); the period follows them
-        (``pl.kapitza_pendulum().replace(w=50).drive_period`` is ``2 pi / 50``).
-
-        Examples
-        --------
-        >>> import math, pendulum_lab as pl
-        >>> turned = pl.foucault_pendulum(latitude=48.85).replace(lat=45)  # degrees, as given
-        >>> math.isclose(turned.parameter_values[turned.system.parameters[-1]], math.pi / 4)
-        True
-        """
+        (:attr:`factory_units`: ``pl.foucault_pendulum().replace(lat=45)`` is at 45 degrees);
+        the period follows them (``pl.kapitza_pendulum().replace(w=50).drive_period`` is
+        ``2 pi / 50``)."""
         changes = self._in_model_units(changes)
         clock = set(self.clock_parameters) & set(changes)
         if clock and self._period is not None and not self._period.free_symbols:
