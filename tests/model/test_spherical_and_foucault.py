@@ -168,11 +168,15 @@ def test_a_bead_on_a_turning_hoop_rises_to_the_angle_the_centrifugal_force_sets(
     assert [eq.angles for eq in hoop(4.0).equilibria] == [(0.0,)]
 
 
+@pytest.fixture(scope="module")
+def paris():
+    return pl.foucault_pendulum(latitude=48.85)
+
+
 @pytest.mark.parametrize(("latitude", "error"), [(100, ValueError), (float("nan"), ValueError),
                                                  ("north", TypeError), (True, TypeError)])
-def test_replace_takes_the_latitude_as_the_factory_does(latitude, error):
+def test_replace_takes_the_latitude_as_the_factory_does(paris, latitude, error):
     """In degrees, in [-90, 90], refused with the factory's own sentence."""
-    paris = pl.foucault_pendulum(latitude=48.85)
     with pytest.raises(error) as by_factory:
         pl.foucault_pendulum(latitude=latitude)
     with pytest.raises(error) as by_replace:
@@ -180,8 +184,8 @@ def test_replace_takes_the_latitude_as_the_factory_does(latitude, error):
     assert str(by_replace.value) == str(by_factory.value)
 
 
-def test_replace_family_and_copied_code_keep_the_latitude_in_degrees():
-    paris, equator = pl.foucault_pendulum(latitude=48.85), pl.foucault_pendulum(latitude=45)
+def test_replace_family_and_copied_code_keep_the_latitude_in_degrees(paris):
+    equator = pl.foucault_pendulum(latitude=45)
     moved = paris.replace(lat=45)
     assert list(moved.parameter_values.values()) == list(equator.parameter_values.values())
     assert paris.family(lat=[0.0, 45.0]).member(1).parameter_values == moved.parameter_values
