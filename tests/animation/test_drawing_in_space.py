@@ -1,5 +1,6 @@
 """A system in space drawn still: from above (x, y) and from the side (x, z), each with the
-bob's trail; the live simulator (a plane) refuses it with the reason."""
+bob's trail. (The live simulator draws it in a projection the student turns:
+tests/widgets/test_live_in_space.py and tests/browser/test_simulator_in_space.py.)"""
 
 import io
 
@@ -71,11 +72,3 @@ def test_draw_pendulum_draws_both_views_into_a_figure_a_pair_or_one_axes(spheric
     # negative control: three axes are not two views
     with pytest.raises(ValueError, match="`ax` must be one matplotlib Axes or 2 of them"):
         draw_pendulum(spherical, orbit.theta[-1], ax=Figure().subplots(1, 3))
-
-
-def test_the_live_simulator_refuses_a_system_in_space_with_the_reason(spherical, elastic):
-    with pytest.raises(ValueError, match="moves in space, and the live simulator draws a "
-                                         "plane: use pl.animation.simulator"):
-        pl.widgets.live_simulator(spherical)
-    # negative control: a planar system given by its points runs in it
-    assert pl.widgets.live_simulator(elastic, t_end=1.0, method="rk4").trajectory.completed

@@ -83,7 +83,7 @@ async ({model, methods, params, states}) => {""" + IMPORTS + """
   const n = module.COORDINATES;
   return states.map(([t, q, p, omega]) => {
     const [dq, dp, momenta, energies] = [n, n, n, 2].map((k) => new Float64Array(k));
-    const places = new Float64Array(2 * module.POINTS);
+    const places = new Float64Array((module.DIMENSIONS || 2) * module.POINTS);
     module.hamilton(t, q, p, params, dq, dp);
     module.momenta(t, q, omega, params, momenta);
     module.energies(t, q, omega, params, energies);

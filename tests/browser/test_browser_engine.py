@@ -68,11 +68,14 @@ def step_tolerance(model, method, y, f) -> float:
 
 
 def random_states(model, count=6, seed=7):
-    """``[t, q, p, omega]`` at random: angles in (-2, 2), a spring's length near its rest."""
+    """``[t, q, p, omega]`` at random: angles in (-2, 2), a spring's length near its rest, a
+    bob in space's horizontal place within 0.8 of its rod's reach."""
     rng = np.random.default_rng(seed)
     n = model.n
     if model.is_chain:
         qs = rng.uniform(-2, 2, (count, n))
+    elif model.dimensions == 3:
+        qs = rng.uniform(-0.55, 0.55, (count, n))
     else:
         qs = np.column_stack([rng.uniform(0.7, 1.5, count), rng.uniform(-1, 1, count)])
     ws = rng.uniform(-2, 2, (count, n))
@@ -155,6 +158,18 @@ CASES = [(stem, method) for stem in MODELS for method in MAIN_METHODS
 def test_the_generated_field_equals_the_python_field_at_random_states(page, stem):
     _, base, _ = page
     assert field_misfit(page, MODELS[stem], shipped_model_url(base, stem)) <= 1.0
+
+
+def test_a_model_in_space_prints_its_positions_with_their_height(page):
+    from pendulum_lab.widgets.browser import model_module
+
+    spherical = pl.spherical_pendulum()
+    source = model_module(spherical).source
+    assert "export const DIMENSIONS = 3;" in source
+    assert field_misfit(page, spherical, source) <= 1.0
+    # negative control: the bob drawn above the pivot instead of below it is caught
+    wrong = source.replace("out[2] = -Math.sqrt", "out[2] = Math.sqrt")
+    assert wrong != source and field_misfit(page, spherical, wrong) > 1.0
 
 
 @pytest.mark.parametrize(("stem", "method"), CASES)

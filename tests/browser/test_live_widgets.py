@@ -143,7 +143,7 @@ def numbers_in(text: str, *names: str) -> list[float]:
 
 def test_the_demo_runs_cleanly(lab, page):
     _, run, _ = lab
-    assert page.locator(SIM).count() == 3 and page.locator(CLICK).count() == 2
+    assert page.locator(SIM).count() == 4 and page.locator(CLICK).count() == 2
     # 60 s at 10 ms: 6001 states, sent in two chunks of at most 4096.
     assert data(page, SIM)["chunks"] == "2"
     page.locator(SIM).first.scroll_into_view_if_needed()
@@ -352,11 +352,12 @@ OVERFLOW_JS = """(cell) => {
 
 
 def test_a_system_with_five_parameters_keeps_its_controls_inside_the_cell(page):
-    # The Kapitza pendulum (a, w, m, l, g) in the live simulator, the demo's last cell, in a
-    # window as narrow as a laptop's half screen.
+    # The Kapitza pendulum (a, w, m, l, g) in the live simulator, in a window as narrow as a
+    # laptop's half screen.
     page.set_viewport_size({"width": 1000, "height": 900})
     try:
-        cell = page.locator(SIM).last.locator("xpath=ancestor::div[contains(@class,'jp-CodeCell')]")
+        cell = page.locator(SIM).nth(KAPITZA).locator(
+            "xpath=ancestor::div[contains(@class,'jp-CodeCell')]")
         cell.scroll_into_view_if_needed()
         page.wait_for_timeout(500)
         SCREENSHOTS.mkdir(parents=True, exist_ok=True)
@@ -522,6 +523,47 @@ def test_dragging_a_shaken_pivot_is_refused_with_a_sentence(page):
     page.mouse.move(bob[0] + 30.0, bob[1])
     page.mouse.up()
     wait_data(page, SIM, "run", f"Number(v) === {run_before + 1}", KAPITZA)
+
+
+SPHERICAL = 3  # the live simulator of the spherical pendulum, a system in space
+
+
+def drag_between(page, start, to) -> None:
+    page.mouse.move(*start)
+    page.mouse.down()
+    for k in range(1, 6):
+        f = k / 5
+        page.mouse.move(start[0] + f * (to[0] - start[0]), start[1] + f * (to[1] - start[1]))
+    page.mouse.up()
+
+
+def test_a_drag_from_above_sets_the_kernels_start_of_a_system_in_space(page):
+    """The kernel's engine: seen from above, a dragged bob starts where it is released; seen at
+    an angle, the same drag turns the view (negative control)."""
+    wait_data(page, SIM, "states", "v === '201'", SPHERICAL)
+    state = paused_at_start(page, SPHERICAL)
+    run_before = int(state["run"])
+    box = page.locator(f"{SIM} canvas").nth(SPHERICAL).bounding_box()
+    x0, y0 = box["x"], box["y"]
+    scale = float(state["scale"])
+    (x, y, z), = drawn_points(state)
+    assert x * x + y * y + z * z == pytest.approx(1.0, abs=1e-5)  # the rod's length, z sent
+    turn, tilt = (float(v) for v in state["view"].split(","))
+    pivot = [float(v) for v in state["pivot"].split(",")]
+    across = x * math.cos(turn) + y * math.sin(turn)
+    up = (-x * math.sin(turn) + y * math.cos(turn)) * math.sin(tilt) + z * math.cos(tilt)
+    target = (x0 + PIVOT[0] + 0.3 * scale, y0 + PIVOT[1] + 0.2 * scale)
+    drag_between(page, (x0 + pivot[0] + scale * across, y0 + pivot[1] - scale * up), target)
+    wait_data(page, SIM, "view", f"v !== '{state['view']}'", SPHERICAL)
+    assert int(data(page, SIM, SPHERICAL)["run"]) == run_before
+    status = page.locator(f"{SIM} .plab-status").nth(SPHERICAL)
+    assert "press “top”" in status.text_content()
+    page.locator(SIM).nth(SPHERICAL).get_by_role("button", name="top").click()
+    wait_data(page, SIM, "view", "v.endsWith(',1.57080')", SPHERICAL)
+    drag_between(page, (x0 + PIVOT[0] + scale * x, y0 + PIVOT[1] - scale * y), target)
+    wait_data(page, SIM, "run", f"Number(v) === {run_before + 1}", SPHERICAL)
+    start = json.loads(kernel_output(page, "print(spherical.trajectory.theta[0].tolist())"))
+    assert start == pytest.approx([0.3, -0.2], abs=1 / scale)  # one pixel's worth of metres
 
 
 def frame_pixel(page, index: int, x: float, y: float) -> tuple[float, float]:

@@ -118,3 +118,12 @@ def test_an_explorers_display_carries_its_run_for_the_browser_only_where_it_can_
     assert runs._repr_mimebundle_()[view][BROWSER_SETTINGS]["method"] == "leapfrog"
     beyond = explore(pl.double_pendulum(), method="glrk8", t_end=2.0, dt=0.02)
     assert BROWSER_SETTINGS not in beyond._repr_mimebundle_()[view]
+
+
+def test_a_system_in_space_prints_three_coordinates_per_point():
+    source = browser.model_module(pl.spherical_pendulum()).source
+    assert "export const DIMENSIONS = 3;" in source
+    assert "out[2] = -Math.sqrt(" in source  # the bob's height, below the pivot
+    # negative control: a plane's points have two
+    planar = browser.model_module(pl.elastic_pendulum()).source
+    assert "export const DIMENSIONS = 2;" in planar and "out[2]" not in planar

@@ -115,13 +115,15 @@ def test_the_poles_and_numpy_numbers_are_latitudes_and_other_arguments_are_check
         pl.spherical_pendulum(mass=-1.0)
 
 
-def test_a_point_in_space_cannot_be_placed_by_a_drag(spherical):
-    with pytest.raises(ValueError, match="moves in space: a point placed at \\(x, y\\)"):
-        spherical.place_point(0, 0.3, -0.9, [0.0, 0.0])
-    assert spherical.positions([0.6, 0.0])[2][0] == pytest.approx(-0.8)  # z from the rod
-    # negative control: a planar system's point is placed
-    assert pl.elastic_pendulum().place_point(0, 0.0, -1.0, [1.0, 0.3]) == pytest.approx(
-        [1.0, 0.0], abs=1e-6)
+def test_a_point_in_space_is_placed_by_its_horizontal_position_within_reach(spherical):
+    """What a drag seen from above sets: the bob's (x, y); its height follows from the rod."""
+    placed = spherical.place_point(0, 0.3, -0.4, [0.1, 0.2])
+    assert placed == pytest.approx([0.3, -0.4], abs=1e-9)
+    assert spherical.positions(placed)[2][0] == pytest.approx(-np.sqrt(1 - 0.25))
+    # negative control: beyond the rod's reach there is no height, and no silent NaN run
+    with pytest.raises(ValueError, match="point 0 of the spherical pendulum cannot be at "
+                                         "\\(1.2, 0\\) m: its rods do not reach there"):
+        spherical.place_point(0, 1.2, 0.0, [0.1, 0.2])
 
 
 def test_the_foucault_pendulums_equilibrium_and_its_two_frequencies():
@@ -164,3 +166,36 @@ def test_a_bead_on_a_turning_hoop_rises_to_the_angle_the_centrifugal_force_sets(
     assert fast == pytest.approx([-side, 0.0, side], abs=1e-9)
     # negative control: below the threshold only the bottom
     assert [eq.angles for eq in hoop(4.0).equilibria] == [(0.0,)]
+
+
+@pytest.fixture(scope="module")
+def paris():
+    return pl.foucault_pendulum(latitude=48.85)
+
+
+@pytest.mark.parametrize(("latitude", "error"), [(100, ValueError), (float("nan"), ValueError),
+                                                 ("north", TypeError), (True, TypeError)])
+def test_replace_takes_the_latitude_as_the_factory_does(paris, latitude, error):
+    """In degrees, in [-90, 90], refused with the factory's own sentence."""
+    with pytest.raises(error) as by_factory:
+        pl.foucault_pendulum(latitude=latitude)
+    with pytest.raises(error) as by_replace:
+        paris.replace(lat=latitude)
+    assert str(by_replace.value) == str(by_factory.value)
+
+
+def test_replace_family_and_copied_code_keep_the_latitude_in_degrees(paris):
+    equator = pl.foucault_pendulum(latitude=45)
+    moved = paris.replace(lat=45)
+    assert list(moved.parameter_values.values()) == list(equator.parameter_values.values())
+    assert paris.family(lat=[0.0, 45.0]).member(1).parameter_values == moved.parameter_values
+    with pytest.raises(ValueError, match="`latitude` must be a number of degrees in "):
+        paris.family(lat=[45.0, 100.0])
+    from pendulum_lab.widgets.calls import model_code
+
+    copied = eval(model_code(moved), {"pl": pl})  # the code an instrument copies
+    assert copied.parameter_values == pytest.approx(moved.parameter_values)
+    # negative control: a number of radians is read as degrees (pi/4 is not 45 degrees)
+    radians = paris.replace(lat=np.pi / 4)
+    assert radians.parameter_values != equator.parameter_values
+    assert list(radians.parameter_values.values())[-1] == pytest.approx(np.radians(np.pi / 4))

@@ -1,11 +1,12 @@
 """A notebook's live simulator on the website: it integrates in the reader's browser.
 
-A throwaway site built with the course's configuration holds a notebook with three live
+A throwaway site built with the course's configuration holds a notebook with four live
 simulators and an explorer: the double pendulum, which the browser can run from its shipped
 module; a chain of seven links, which it cannot (the negative control); the Kapitza pendulum,
-whose module is not shipped and travels in the page; and an explorer's run. In Chromium each
-runnable one is computed in the browser above its still picture, the chain shows only its
-picture with the reason.
+whose module is not shipped and travels in the page; the spherical pendulum, a system in space
+(drawn in a projection the reader turns, as on notebook 19's page); and an explorer's run. In
+Chromium each runnable one is computed in the browser above its still picture, the chain shows
+only its picture with the reason.
 """
 
 from __future__ import annotations
@@ -33,6 +34,9 @@ def site(tmp_path_factory):
                       "method='rk4')", alt=["The Kapitza pendulum held up by its shaking"]),
             Annotated("widgets.explore(pl.double_pendulum(), method='leapfrog', t_end=5.0, "
                       "dt=0.02)", alt=["An explorer's plots of the double pendulum"]),
+            Annotated("widgets.live_simulator(pl.spherical_pendulum(), [0.4, 0.0], [0.0, 1.5], "
+                      "t_end=1.0, method='rk4')",
+                      alt=["The spherical pendulum from above and from the side"]),
         ),
     })
     result = build(folder)
@@ -48,17 +52,26 @@ def test_a_notebooks_live_simulator_runs_in_the_browser_above_its_picture(site, 
         page.goto(f"{base}/lesson.html")
         page.wait_for_function(
             "() => [...document.querySelectorAll('.plab-live')].filter("
-            "(el) => el.dataset.run === '1').length === 3", timeout=30_000)
+            "(el) => el.dataset.run === '1').length === 4", timeout=30_000)
         first = int(page.evaluate("() => document.querySelector('.plab-live').dataset.frames"))
         page.wait_for_timeout(500)
         later = page.evaluate("() => ({...document.querySelector('.plab-live').dataset})")
         assert int(later["frames"]) > first and later["states"] == "501"
-        assert page.locator(".plab-browser-sim").count() == 3  # the 7-link chain has none
-        assert page.locator("img").count() == 4  # every still picture stays
+        assert page.locator(".plab-browser-sim").count() == 4  # the 7-link chain has none
+        assert page.locator("img").count() == 5  # every still picture stays
+        # the system in space: its points with their height, its view buttons shown (a plane's
+        # simulators keep theirs hidden)
+        space = page.locator(".plab-live").nth(3)
+        x, y, z = (float(v) for v in space.get_attribute("data-points").split())
+        # on the rod's sphere, to the sag of a chord between states 10 ms apart while it plays
+        assert x * x + y * y + z * z == pytest.approx(1.0, abs=1e-3) and z < 0
+        assert space.locator(".plab-views").is_visible()
+        assert not page.locator(".plab-live").first.locator(".plab-views").is_visible()
         text = page.locator("article, body").first.inner_text()
         assert "500 steps of glrk4 (Δt = 0.01 s) computed in the browser" in text
         assert "cannot run in this page (a model of 7 coordinates" in text
         assert "2000 steps of rk4 (Δt = 0.001 s) computed in the browser" in text  # Kapitza
         assert "250 steps of leapfrog (Δt = 0.02 s) computed in the browser" in text
+        assert "100 steps of rk4 (Δt = 0.01 s) computed in the browser" in text  # in space
         assert all(url.startswith(base) for url in requests)
         assert [e for e in page.errors if "favicon" not in e and "404" not in e] == []

@@ -15,8 +15,9 @@ JavaScript module with no imports, which the kernel-free simulator of the course
 ``energies(t, q, omega, params, out)``
     ``out[0] = T``, ``out[1] = V``.
 ``positions(t, q, params, out)``
-    ``out[2 k], out[2 k + 1]``: the position ``(x, y)`` of point ``k`` (``POINTS`` of them;
-    none for a system given by its Lagrangian).
+    ``out[D k + j]``: coordinate ``j`` of the position of point ``k`` (``POINTS`` of them, none
+    for a system given by its Lagrangian), ``D = DIMENSIONS``: ``(x, y)`` for a plane, ``(x, y,
+    z)`` for points in space.
 
 The printer is SymPy's :class:`~sympy.printing.jscode.JavascriptCodePrinter` with integer
 powers written as products (``x*x``, as Numba evaluates ``x**2``; ``Math.pow`` is not
@@ -165,8 +166,13 @@ def _function(name: str, arguments: str, comment: str, lines: list[str]) -> str:
 
 
 def _points(system) -> list:
-    """The positions ``(x, y)`` of the system's points (a chain's bobs)."""
+    """The positions ``(x, y)`` or ``(x, y, z)`` of the system's points (a chain's bobs)."""
     return list(system.positions) if isinstance(system, Chain) else list(system.points)
+
+
+def _dimensions(system) -> int:
+    """2 for a chain or a planar system, 3 for points in space."""
+    return 2 if isinstance(system, Chain) else system.dimensions
 
 
 def _describe(system) -> str:
@@ -215,8 +221,9 @@ def _body(system) -> str:
         "c")
     energies = unpack + velocities + parameters + _assignments(
         ["out[0]", "out[1]"], [system.kinetic, system.potential], mapping, "d")
+    width = _dimensions(system)
     places = unpack + parameters + _assignments(
-        [f"out[{2 * k + j}]" for k in range(len(points)) for j in range(2)],
+        [f"out[{width * k + j}]" for k in range(len(points)) for j in range(width)],
         [c for point in points for c in point], mapping, "x")
     names = ", ".join(f'"{s}"' for s in system.parameters)
     dq_rule = "M(q, t)^-1 (p - b(q, t))" if has_offset else "M(q)^-1 p"
@@ -230,6 +237,7 @@ def _body(system) -> str:
         f"export const COORDINATES = {n};\n"
         f"export const PARAMETERS = [{names}];\n"
         f"export const POINTS = {len(points)};\n"
+        f"export const DIMENSIONS = {width};\n"
     )
     if n > 2:
         text += _SOLVE_SYMMETRIC
@@ -240,7 +248,7 @@ def _body(system) -> str:
     text += _function("energies", "t, q, omega, params, out",
                       "out[0] = T (kinetic), out[1] = V (potential).", energies)
     text += _function("positions", "t, q, params, out",
-                      "out[2 k], out[2 k + 1] = x, y of point k.", places)
+                      f"out[{width} k ...] = {', '.join('xyz'[:width])} of point k.", places)
     return text
 
 

@@ -79,6 +79,12 @@ class SystemModel(PendulumModel):
         Its symbolic equations (also ``chain``, the attribute the code generator reads).
     n : int
         Number of generalized coordinates.
+    factory_units : dict of str -> (callable, callable)
+        The parameters its factory takes in another unit than the model holds them (the
+        Foucault pendulum's ``lat``: degrees given, radians held), each with two functions:
+        one checks a value in the factory's unit and turns it into the model's, the other
+        turns a held value back (:meth:`in_factory_units`). :meth:`replace` and
+        :meth:`family` take values in the factory's unit. Empty for most systems.
     """
 
     def __init__(self, system: MechanicalSystem, values: dict | None = None, *,
@@ -112,6 +118,7 @@ class SystemModel(PendulumModel):
         self.start = (np.zeros(self.n) if start is None
                       else check.state_vector("start", start, self.n))
         self.factory = factory
+        self.factory_units = {}
 
     #: Its coordinates may be lengths or positions: never reduced by whole turns.
     periodic_coordinates = False
@@ -208,9 +215,31 @@ class SystemModel(PendulumModel):
         through its sine and cosine): the sliders offer angles in ``[-pi, pi]`` rad."""
         return self.system.angle_coordinates
 
+    def _in_model_units(self, changes: dict, *, arrays: bool = False) -> dict:
+        """``changes`` with the values of :attr:`factory_units` turned into the model's unit
+        (checked as the factory checks them, entry by entry for arrays)."""
+        converted = dict(changes)
+        for name, (convert, _) in self.factory_units.items():
+            if name in changes:
+                value = changes[name]
+                entries = np.ravel(np.asarray(value)).tolist() if arrays else None
+                converted[name] = (np.array([convert(v) for v in entries], dtype=float)
+                                   .reshape(np.shape(value))
+                                   if arrays and np.ndim(value) else convert(value))
+        return converted
+
+    def in_factory_units(self, values: dict) -> dict:
+        """``values`` (``{name: number}`` in the units the model holds, as
+        :attr:`parameter_values` has them) in the units :meth:`replace` takes."""
+        return {name: (self.factory_units[name][1](value) if name in self.factory_units
+                       else value) for name, value in values.items()}
+
     def replace(self, **changes) -> SystemModel:
-        """A copy with some parameter values changed (by name); the period follows them
-        (``pl.kapitza_pendulum().replace(w=50).drive_period`` is ``2 pi / 50``)."""
+        """A copy with some parameter values changed (by name), in the units the factory takes
+        (:attr:`factory_units`: ``pl.foucault_pendulum().replace(lat=45)`` is at 45 degrees);
+        the period follows them (``pl.kapitza_pendulum().replace(w=50).drive_period`` is
+        ``2 pi / 50``)."""
+        changes = self._in_model_units(changes)
         clock = set(self.clock_parameters) & set(changes)
         if clock and self._period is not None and not self._period.free_symbols:
             raise ValueError(
@@ -218,9 +247,11 @@ class SystemModel(PendulumModel):
                 f"on the time, but its period was given as the number {self._period_value:g} "
                 "s and no period could be derived from its equations: build it with `period` "
                 "as an expression of the parameters (such as 2*sp.pi/w)")
-        return SystemModel(self.system, dict(zip(map(str, self.system.parameters),
+        copy = SystemModel(self.system, dict(zip(map(str, self.system.parameters),
                                                  self._params)) | changes, period=self._period,
                            start=self.start, factory=self.factory)
+        copy.factory_units = dict(self.factory_units)
+        return copy
 
     @property
     def clock_parameters(self) -> tuple[str, ...]:
@@ -246,13 +277,13 @@ class SystemModel(PendulumModel):
         >>> springs.shape, [round(float(w), 4) for w in springs.member(1).parameter_values.values()]
         ((3,), [1.0, 39.24, 0.75, 9.81])
         """
-        return SystemFamily(self, values)
+        return SystemFamily(self, self._in_model_units(values, arrays=True))
 
     def __reduce__(self):
         return SystemModel, (self.system, dict(zip(map(str, self.system.parameters),
                                                    self._params))), {
             "_period": self._period, "_period_value": self._period_value, "start": self.start,
-            "factory": self.factory}
+            "factory": self.factory, "factory_units": self.factory_units}
 
     @functools.cached_property
     def equilibria(self) -> tuple:
@@ -382,7 +413,8 @@ class SystemModel(PendulumModel):
 
     def place_point(self, point: int, x: float, y: float, theta, t: float = 0.0) -> np.ndarray:
         """The coordinates nearest ``theta`` that put point ``point`` at ``(x, y)`` [m] at
-        time ``t``.
+        time ``t``; for points in space, its horizontal position ``(x, y)`` (where a view from
+        above shows it: the height follows from the coordinates).
 
         Damped Gauss-Newton (Levenberg-Marquardt) on the point's position from ``theta``:
         where the point's position fixes the coordinates (the elastic pendulum's bob), it
@@ -398,10 +430,6 @@ class SystemModel(PendulumModel):
             singular mass matrix, such as ``r = 0`` of polar coordinates).
         """
         drawing = self.drawing
-        if self.dimensions != 2:
-            raise ValueError(f"{self.system.name} moves in space: a point placed at (x, y) on "
-                             "a flat picture does not fix its height, so dragging cannot set "
-                             "its coordinates; give them as numbers (`theta`) instead")
         point = check.index_below("point", point, len(drawing.masses))
         if drawing.movable[point] is not None:
             raise ValueError(drawing.movable[point])
@@ -410,7 +438,8 @@ class SystemModel(PendulumModel):
         t = check.real_number("t", t)
 
         def place(coordinates):
-            xs, ys = self.positions(coordinates, t)
+            with np.errstate(invalid="ignore"):  # a height beyond reach: refused below
+                xs, ys = self.positions(coordinates, t)[:2]
             return np.array([xs[point], ys[point]])
 
         def jacobian(coordinates):
@@ -441,6 +470,15 @@ class SystemModel(PendulumModel):
                 1.0, np.max(np.abs(matrix)) ** self.n):
             raise ValueError(f"at ({x:.3g}, {y:.3g}) m the coordinates of {self.system.name} "
                              "fail (its mass matrix is singular there): release it elsewhere")
+        # Beyond a rod's reach a point in space has no height (a square root of a negative
+        # number): refused, not run with NaN positions and an indefinite mass matrix.
+        with np.errstate(invalid="ignore"):
+            placed = np.concatenate(self.positions(q, t))
+        if not np.all(np.isfinite(placed)) or np.min(
+                np.linalg.eigvalsh(matrix)) <= 0:
+            raise ValueError(f"point {point} of {self.system.name} cannot be at ({x:.3g}, "
+                             f"{y:.3g}) m: its rods do not reach there; release it nearer the "
+                             "pivot")
         return q
 
     def __repr__(self) -> str:
@@ -480,6 +518,7 @@ class SystemFamily(FamilyMembers, SystemModel):
         self.n, self.forced, self._fn = base.n, base.forced, base._fn
         self._period, self._period_value = base._period, base._period_value
         self.start, self.factory = base.start, base.factory
+        self.factory_units = base.factory_units
         defaults = dict(zip(map(str, base.system.parameters), base._params))
         self._params = tuple(np.array(np.broadcast_to(self.values.get(name, value), shape),
                                       dtype=float) for name, value in defaults.items())
@@ -489,6 +528,11 @@ class SystemFamily(FamilyMembers, SystemModel):
     @property
     def shape(self) -> tuple:
         return self._params[0].shape
+
+    def member(self, index) -> SystemModel:
+        """The member at ``index`` (an index into ``shape``) as a model of its own."""
+        held = {k: float(a[index]) for k, a in self.values.items()}
+        return self.base.replace(**self.base.in_factory_units(held))
 
     def _mapped(self, transform) -> SystemFamily:
         return SystemFamily(self.base, {k: transform(a) for k, a in self.values.items()})
@@ -741,7 +785,8 @@ def foucault_pendulum(latitude: float = 48.85, length: float = 1.0, mass: float 
     ----------
     latitude : float
         Degrees in [-90, 90], north positive (the default is Paris, the Panthéon's
-        pendulum). The model's parameter ``lat`` holds it in radians.
+        pendulum). The model's parameter ``lat`` holds it in radians; ``replace(lat=...)`` and
+        ``family(lat=[...])`` take degrees, as here, checked the same way.
     length, mass, g : float
         The rod's length [m], the bob's mass [kg], the local gravity [m/s^2].
     rotation_rate : float
@@ -768,4 +813,11 @@ def foucault_pendulum(latitude: float = 48.85, length: float = 1.0, mass: float 
         name="the Foucault pendulum")
     model = _made_by(model, "foucault_pendulum", start=[0.1 * values[rod], 0.0])
     model.factory = f"pl.foucault_pendulum(latitude={lat_degrees:g})"
+    model.factory_units = {"lat": (_latitude_radians, math.degrees)}
     return model
+
+
+def _latitude_radians(latitude) -> float:
+    """A latitude in degrees, checked as :func:`foucault_pendulum` checks it, in radians (the
+    unit of the model's ``lat``)."""
+    return math.radians(_latitude(latitude))

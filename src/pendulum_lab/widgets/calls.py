@@ -50,7 +50,8 @@ mass=1.0, length=1.0, g=1.0)'
     "pl.cart_pendulum().replace(**{'M': 1.0, 'm': 0.25, 'l': 1.0, 'g': 9.81})"
     """
     if not model.is_chain:
-        values = {str(s): float(v) for s, v in model.parameter_values.items()}
+        values = model.in_factory_units({str(s): float(v)
+                                         for s, v in model.parameter_values.items()})
         return f"{model.factory or 'model'}.replace(**{values!r})"
     masses, lengths = [float(m) for m in model.masses], [float(v) for v in model.lengths]
     g = float(model.g)

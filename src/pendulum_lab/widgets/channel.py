@@ -113,8 +113,9 @@ def figure_message(model: PendulumModel, points=None) -> dict:
     computes from the angles and ``lengths``, or ``"points"``, sent), the
     :class:`~pendulum_lab.model.Drawing`'s ``masses``, ``rods``, ``springs`` and ``movable``
     (None or the sentence refusing a drag), ``uses_origin``, ``trailed`` (the point whose
-    path is the trail: the last massive one) and ``reach`` [m] (a chain's length, else the
-    farthest point of ``points``, shape ``(states, points, 2)``, from the origin)."""
+    path is the trail: the last massive one), ``dimensions`` (2, or 3 for points in space,
+    whose positions come as ``(x, y, z)``, ``z`` up) and ``reach`` [m] (a chain's length, else
+    the largest coordinate of ``points``, shape ``(states, points, dimensions)``, in size)."""
     drawing = model.drawing
     masses = [float(m) for m in drawing.masses]
     reach = drawing.reach
@@ -129,5 +130,6 @@ def figure_message(model: PendulumModel, points=None) -> dict:
         "movable": list(drawing.movable),
         "uses_origin": drawing.uses_origin,
         "trailed": max(k for k, m in enumerate(masses) if m > 0),
+        "dimensions": int(getattr(model, "dimensions", 2)),
         "reach": float(reach),
     }

@@ -402,8 +402,8 @@ def model_from_controls(model: PendulumModel, controls: dict) -> PendulumModel:
     and drive unchanged (cheap: compiled code is shared per number of links). A system's
     parameters are its own sliders' values (its compiled code takes them as arguments)."""
     if not model.is_chain:
-        return model.replace(**{str(s): controls[parameter_key(model, str(s))].value
-                                for s in model.parameter_values})
+        return model.replace(**model.in_factory_units({
+            str(s): controls[parameter_key(model, str(s))].value for s in model.parameter_values}))
     keys = control_names(model.n)
     return model.replace(
         masses=tuple(controls[k].value for k in keys["mass"]),

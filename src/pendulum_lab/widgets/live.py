@@ -19,6 +19,14 @@ In the browser
     chain follows; on release the kernel restarts the motion from there, at
     rest (:meth:`LiveSimulator.drag`).
 
+A system in space (``model.dimensions == 3``; its points travel as ``(x, y, z)``)
+    is drawn in a projection the student turns: a drag on the picture turns it
+    about the vertical and tilts it; "reset view", "top" and "side" pick one.
+    Only in the top view does dragging a bob set the start, by its horizontal
+    position ``(x, y)`` (kept within 95 % of its distance from the pivot); the
+    release calls :meth:`LiveSimulator.drag` with that ``(x, y)``. Elsewhere a drag
+    turns the view, and the status line says how to set the start.
+
 A description of the state shown (time, kinetic, potential and total
 energy, the energy error) sits in an ARIA live region beside the canvas,
 updated when the state shown changes other than by playing (a step, a
@@ -95,7 +103,8 @@ def run_messages(
        float64 before the cast (float32 energies would hide errors below
        about 1e-6 J);
     3. for a system given by its points (not a chain), the points' positions,
-       shape ``(count, points, 2)`` [m]: the browser cannot compute them.
+       shape ``(count, points, 2)`` [m], ``(count, points, 3)`` for points in space
+       (``figure["dimensions"]``): the browser cannot compute them.
 
     ``content`` says where the chunk goes (``run``, ``chunk`` of ``chunks``,
     ``first`` state, ``count``, ``chunk_states``) and repeats what the drawing needs: ``links``
@@ -205,7 +214,8 @@ def released_angles(model: PendulumModel, theta, bob: int, x: float, y: float) -
     bob : int
         Which bob was dragged, ``0 <= bob < n``.
     x, y : float
-        The release point [m], pivot at the origin, ``y`` up.
+        The release point [m], pivot at the origin, ``y`` up; for a system in space its
+        horizontal position (as seen from above, ``z`` up).
 
     Returns
     -------
@@ -436,11 +446,6 @@ def live_simulator(
     >>> sim.trajectory.theta[0].round(4).tolist(), sim.trajectory.omega[0].tolist()
     ([1.5708, 2.5], [0.0, 0.0])
     """
-    if getattr(model, "dimensions", 2) != 2:
-        raise ValueError(
-            f"{model.name} moves in space, and the live simulator draws a plane: use "
-            "pl.animation.simulator(model) or pl.animation.html_animation(run, model), which "
-            "draw it from above and from the side")
     return build_simulator(
         LiveSimulator, model, theta0, omega0, t_end=t_end, dt=dt, method=method, speed=speed,
         trail=trail,

@@ -8,7 +8,12 @@
 // lengths, a system's points are sent beside its coordinates. Dragging a bob moves the
 // chain (a system's point follows the pointer alone); on release the kernel is asked for
 // the motion from there. A point the coordinates do not place (a shaken pivot) is not
-// dragged: its sentence, from the kernel, goes to the status line. A text
+// dragged: its sentence, from the kernel, goes to the status line. A system in space
+// (figure.dimensions = 3, points sent as x, y, z with z up) is drawn in a projection the
+// student turns: a drag on anything but a bob in the top view turns it about the vertical
+// (left-right) and tilts it (up-down); "reset view", "top" and "side" pick one. Only seen from
+// straight above is a point's place on the screen a place in space (its horizontal x, y: the
+// height follows from the coordinates), so only there does dragging a bob set the start. A text
 // description of the state shown (time, energies, energy error) is kept in an ARIA live
 // region, updated when the state shown changes other than by playing (a step, a scrub,
 // pause, a new run) and when playing starts or ends, so that a screen reader announces it.
@@ -29,6 +34,17 @@ const COLOURS = {
   text: "#222222",
   faint: "#9a9a9a",
 };
+// A system in space: the view it opens with (turned 30 degrees, seen from 25 degrees above the
+// horizontal), radians per pixel of a turning drag, and how far from the pivot (a fraction of
+// the dragged point's distance from it) a drag in the top view may place a point: where
+// coordinates such as the spherical pendulum's (x, y) fail, at the pivot's level, stays out.
+const VIEW_START = { turn: -Math.PI / 6, tilt: (25 * Math.PI) / 180 };
+const TURN_PER_PIXEL = 0.01;
+const DRAG_REACH = 0.95;
+const TOP = Math.PI / 2;
+const PLANE_HINT = "drag a bob · Space play/pause · ←/→ step · ↑/↓ speed";
+const SPACE_HINT = "drag the picture to turn it · to set where the bob starts: “top”, then " +
+  "drag the bob · Space play/pause · ←/→ step";
 const KEY_HELP =
   "Space or K: play or pause. Left and right arrows: one step back or forward. " +
   "Up and down arrows: faster or slower. Home, End: start, end. " +
@@ -45,14 +61,15 @@ function element(tag, className, attributes = {}) {
 function newRun(header) {
   const { states, links, figure } = header;
   const sentPoints = figure.kind === "points" ? figure.masses.length : 0;
+  const width = figure.dimensions || 2; // x, y (and z for points in space)
   return {
     id: header.run,
     meta: header,
     angles: new Float32Array(states * links),
-    points: new Float32Array(states * sentPoints * 2), // a system's x, y of each point
+    points: new Float32Array(states * sentPoints * width), // a system's x, y (, z) of each point
     energies: new Float32Array(states * 3),
     error: new Float32Array(states),
-    lastBob: new Float32Array(states * 2), // x, y of the last bob, for the trail
+    lastBob: new Float32Array(states * 3), // x, y, z of the last bob, for the trail (z = 0 in a plane)
     got: new Set(),
     available: 0, // states received without a gap from the first
   };
@@ -68,10 +85,12 @@ function addChunk(run, header, buffers) {
   const figure = header.figure;
   if (figure.kind === "points") {
     const count = figure.masses.length;
-    run.points.set(floats(buffers[3]), header.first * count * 2);
+    const width = figure.dimensions || 2;
+    run.points.set(floats(buffers[3]), header.first * count * width);
     for (let i = header.first; i < header.first + header.count; i++) {
-      run.lastBob[2 * i] = run.points[(i * count + figure.trailed) * 2];
-      run.lastBob[2 * i + 1] = run.points[(i * count + figure.trailed) * 2 + 1];
+      for (let c = 0; c < width; c++) {
+        run.lastBob[3 * i + c] = run.points[(i * count + figure.trailed) * width + c];
+      }
     }
   }
   const lengths = figure.kind === "chain" ? header.lengths : [];
@@ -83,8 +102,8 @@ function addChunk(run, header, buffers) {
       x += lengths[j] * Math.sin(a);
       y -= lengths[j] * Math.cos(a);
     }
-    run.lastBob[2 * i] = x;
-    run.lastBob[2 * i + 1] = y;
+    run.lastBob[3 * i] = x;
+    run.lastBob[3 * i + 1] = y;
   }
   run.got.add(header.chunk);
   // Playable: the states up to the first chunk still missing.
@@ -126,14 +145,26 @@ function render({ model, el }) {
     "aria-label": "time",
   });
   const clock = element("span", "plab-clock");
+  // The views of a system in space (hidden in a plane).
+  const views = element("span", "plab-views", { role: "group", "aria-label": "view" });
+  const viewButtons = {};
+  for (const [name, title] of [
+    ["reset view", "the view it opened with"],
+    ["top", "from straight above: drag the bob to set where it starts"],
+    ["side", "from the side: x across, z up"],
+  ]) {
+    viewButtons[name] = element("button", "plab-button plab-view", { type: "button", title });
+    viewButtons[name].textContent = name;
+    views.append(viewButtons[name]);
+  }
+  views.hidden = true;
   const help = element("span", "plab-help");
-  help.textContent = "drag a bob · Space play/pause · ←/→ step · ↑/↓ speed";
   const status = element("div", "plab-status", { role: "status", "aria-live": "polite" });
   const description = element("div", "plab-sr-only plab-description", {
     "aria-live": "polite",
     "aria-atomic": "true",
   });
-  bar.append(back, play, forward, speedBox, scrub, clock);
+  bar.append(back, play, forward, speedBox, scrub, clock, views);
   root.append(canvas, bar, help, status, description);
   el.appendChild(root);
 
@@ -158,6 +189,8 @@ function render({ model, el }) {
   let frames = 0;
   let dirty = true;
   let dragging = null; // {bob, angles, pointerId}
+  let view = { ...VIEW_START }; // a system in space: turn about the vertical, tilt above the horizontal
+  let turning = null; // a drag turning the view: {pointerId, px, py, turn, tilt}
   let pending = false; // a release sent, no answer yet
   let frameId = 0;
   let drawSeconds = 0; // time spent drawing, for data-draw-ms (the cost of one frame)
@@ -182,6 +215,7 @@ function render({ model, el }) {
     speedBox.value = String(speed);
   }
   fillSpeeds();
+  showViews();
 
   function duration() {
     if (!run) return 0;
@@ -254,16 +288,20 @@ function render({ model, el }) {
     }
     return out;
   }
-  // A system's points at `time`: [xs, ys], interpolated like the coordinates.
+  // A system's points at `time`: [xs, ys, zs], interpolated like the coordinates (zs zero
+  // in a plane).
   function pointsAt(time) {
     const count = run.meta.figure.masses.length;
+    const width = run.meta.figure.dimensions || 2;
     const xs = new Float64Array(count);
     const ys = new Float64Array(count);
+    const zs = new Float64Array(count);
     for (let j = 0; j < count; j++) {
-      xs[j] = seriesAt(run.points, 2 * count, 2 * j, time);
-      ys[j] = seriesAt(run.points, 2 * count, 2 * j + 1, time);
+      xs[j] = seriesAt(run.points, width * count, width * j, time);
+      ys[j] = seriesAt(run.points, width * count, width * j + 1, time);
+      if (width === 3) zs[j] = seriesAt(run.points, width * count, width * j + 2, time);
     }
-    return [xs, ys];
+    return [xs, ys, zs];
   }
   function seriesAt(array, width, column, time) {
     const last = Math.max(run.available - 1, 0);
@@ -281,12 +319,48 @@ function render({ model, el }) {
     return (CHAIN / 2 - 14) / (1.05 * reach);
   }
   const pivot = { x: CHAIN / 2, y: CHAIN / 2 };
+  // In space the pivot moves up or down with the tilt, so that the floor circle (radius and
+  // depth reach) and the pivot's level, seen from view.tilt, sit centred in the panel.
+  function placePivot() {
+    pivot.y = CHAIN / 2;
+    if (!inSpace()) return;
+    const reach = run.meta.figure.reach;
+    const [sin, cos] = [Math.sin(view.tilt), Math.cos(view.tilt)];
+    const [low, high] = [-reach * (sin + cos), Math.max(0, reach * (sin - cos))];
+    pivot.y = CHAIN / 2 + chainScale() * ((low + high) / 2);
+  }
   function toCanvas(x, y, s) {
     return [pivot.x + x * s, pivot.y - y * s];
   }
-  // The points of the configuration shown, [xs, ys] (the pivot not among them).
+  function inSpace() {
+    return Boolean(run) && run.meta.figure.dimensions === 3;
+  }
+  function topView() {
+    return inSpace() && view.tilt === TOP;
+  }
+  // The picture's (across, up) [m] of the point (x, y, z): turned by view.turn about the
+  // vertical z, then seen from view.tilt above the horizontal (0: from the side, x across and z
+  // up; pi/2: from above, x across and y up). In a plane, (x, y) as it is.
+  function project(x, y, z) {
+    if (!inSpace()) return [x, y];
+    const [c, s] = [Math.cos(view.turn), Math.sin(view.turn)];
+    const deep = -x * s + y * c;
+    return [x * c + y * s, deep * Math.sin(view.tilt) + z * Math.cos(view.tilt)];
+  }
+  // A point of the top view's picture, (across, up) [m], as the horizontal (x, y) it shows.
+  function unproject(across, up) {
+    const [c, s] = [Math.cos(view.turn), Math.sin(view.turn)];
+    return [across * c - up * s, across * s + up * c];
+  }
+  function screen(x, y, z, s) {
+    return toCanvas(...project(x, y, z), s);
+  }
+  // The points of the configuration shown, [xs, ys, zs] (the pivot not among them; zs zero
+  // in a plane).
   function positions(angles) {
-    if (run.meta.figure.kind === "points") return dragging ? [dragging.xs, dragging.ys] : pointsAt(t);
+    if (run.meta.figure.kind === "points") {
+      return dragging ? [dragging.xs, dragging.ys, dragging.zs] : pointsAt(t);
+    }
     const lengths = run.meta.lengths;
     const xs = [];
     const ys = [];
@@ -298,7 +372,7 @@ function render({ model, el }) {
       xs.push(x);
       ys.push(y);
     }
-    return [xs, ys];
+    return [xs, ys, new Float64Array(xs.length)];
   }
   function bobRadius(j) {
     const masses = run.meta.figure.masses;
@@ -326,23 +400,29 @@ function render({ model, el }) {
     drawReadout(c);
     root.dataset.time = t.toFixed(4);
     root.dataset.theta = Array.from(angles, (a) => a.toFixed(5)).join(",");
-    const [xs, ys] = positions(angles);
-    root.dataset.points = Array.from(xs, (x, j) => `${x.toFixed(5)} ${ys[j].toFixed(5)}`).join(",");
+    const [xs, ys, zs] = positions(angles);
+    const space = inSpace();
+    root.dataset.points = Array.from(xs, (x, j) =>
+      `${x.toFixed(5)} ${ys[j].toFixed(5)}${space ? ` ${zs[j].toFixed(5)}` : ""}`).join(",");
+    if (space) root.dataset.view = `${view.turn.toFixed(5)},${view.tilt.toFixed(5)}`;
   }
 
   function drawChain(c, angles) {
     const s = chainScale();
+    placePivot();
     root.dataset.scale = s.toFixed(6);
+    root.dataset.pivot = `${pivot.x.toFixed(3)},${pivot.y.toFixed(3)}`;
     c.strokeStyle = COLOURS.grid;
     c.lineWidth = 1;
     c.strokeRect(0.5, 0.5, CHAIN - 1, CHAIN - 1);
+    if (inSpace()) drawReference(c, s);
     // Trail of the last bob over the past `trail` seconds, fading out.
     const trail = model.get("trail");
     if (!dragging && trail > 0) {
       const spacing = run.meta.spacing;
       const last = Math.min(Math.floor(t / spacing), run.available - 1);
       const first = Math.max(0, Math.ceil((t - trail) / spacing));
-      const [xs, ys] = positions(angles);
+      const [xs, ys, zs] = positions(angles);
       const segments = 8;
       const per = Math.max(1, Math.ceil((last - first + 1) / segments));
       c.lineWidth = 1.5;
@@ -351,19 +431,18 @@ function render({ model, el }) {
         c.beginPath();
         c.globalAlpha = 0.15 + 0.6 * ((k - first) / Math.max(last - first, 1));
         c.strokeStyle = COLOURS.trail;
-        c.moveTo(...toCanvas(run.lastBob[2 * k], run.lastBob[2 * k + 1], s));
-        for (let i = k + 1; i <= end; i++) {
-          c.lineTo(...toCanvas(run.lastBob[2 * i], run.lastBob[2 * i + 1], s));
-        }
+        const bob = run.lastBob;
+        c.moveTo(...screen(bob[3 * k], bob[3 * k + 1], bob[3 * k + 2], s));
+        for (let i = k + 1; i <= end; i++) c.lineTo(...screen(bob[3 * i], bob[3 * i + 1], bob[3 * i + 2], s));
         const j = run.meta.figure.trailed;
-        if (end === last) c.lineTo(...toCanvas(xs[j], ys[j], s));
+        if (end === last) c.lineTo(...screen(xs[j], ys[j], zs[j], s));
         c.stroke();
       }
       c.globalAlpha = 1;
     }
-    const [xs, ys] = positions(angles);
+    const [xs, ys, zs] = positions(angles);
     const figure = run.meta.figure;
-    const at = (k) => (k < 0 ? toCanvas(0, 0, s) : toCanvas(xs[k], ys[k], s));
+    const at = (k) => (k < 0 ? toCanvas(0, 0, s) : screen(xs[k], ys[k], zs[k], s));
     c.strokeStyle = COLOURS.rod;
     c.lineWidth = 3;
     for (const [i, j] of figure.rods) {
@@ -377,7 +456,7 @@ function render({ model, el }) {
     c.fillStyle = "#000000";
     if (figure.uses_origin) c.fillRect(pivot.x - 4, pivot.y - 4, 8, 8);
     for (let j = 0; j < xs.length; j++) {
-      const [px, py] = toCanvas(xs[j], ys[j], s);
+      const [px, py] = at(j);
       if (figure.masses[j] === 0) {
         c.fillStyle = "#000000"; // a massless point: a shaken pivot
         c.fillRect(px - 4, py - 4, 8, 8);
@@ -396,6 +475,55 @@ function render({ model, el }) {
       c.font = "12px sans-serif";
       c.fillText(pending ? "computing the new motion…" : "release to start from here", 10, CHAIN - 10);
     }
+  }
+
+  // A system in space: a faint floor circle (radius reach, at the depth of reach below the
+  // pivot) with its x and y axes, the plumb line from the pivot and each bob's shadow on the
+  // floor, so that a turn of the view shows; the view's name in the corner.
+  function drawReference(c, s) {
+    const reach = run.meta.figure.reach;
+    const floor = -reach;
+    c.save();
+    c.strokeStyle = COLOURS.grid;
+    c.lineWidth = 1;
+    c.beginPath();
+    for (let k = 0; k <= 64; k++) {
+      const a = (2 * Math.PI * k) / 64;
+      const [px, py] = screen(reach * Math.cos(a), reach * Math.sin(a), floor, s);
+      if (k === 0) c.moveTo(px, py);
+      else c.lineTo(px, py);
+    }
+    c.stroke();
+    c.fillStyle = COLOURS.faint;
+    c.font = "12px sans-serif";
+    for (const [label, ax, ay] of [["x", 1, 0], ["y", 0, 1]]) {
+      c.beginPath();
+      c.moveTo(...screen(0, 0, floor, s));
+      const end = screen(ax * reach, ay * reach, floor, s);
+      c.lineTo(...end);
+      c.stroke();
+      c.fillText(label, end[0] + 3, end[1] - 3);
+    }
+    c.setLineDash([3, 4]);
+    c.beginPath();
+    c.moveTo(...screen(0, 0, 0, s));
+    c.lineTo(...screen(0, 0, floor, s));
+    c.stroke();
+    c.setLineDash([]);
+    const [xs, ys] = positions(dragging ? dragging.angles : anglesAt(t));
+    for (let j = 0; j < xs.length; j++) {
+      if (run.meta.figure.masses[j] === 0) continue;
+      const [px, py] = screen(xs[j], ys[j], floor, s);
+      c.beginPath();
+      c.arc(px, py, 3, 0, 2 * Math.PI);
+      c.fill();
+    }
+    const name = topView() ? "from above: drag the bob"
+      : view.tilt === 0 && view.turn === 0 ? "from the side: x, z"
+        : `turned ${Math.round((view.turn * 180) / Math.PI)}°, ` +
+          `${Math.round((view.tilt * 180) / Math.PI)}° above`;
+    c.fillText(name, 8, 16);
+    c.restore();
   }
 
   // A zigzag between two canvas points, of constant width however far it is stretched.
@@ -614,6 +742,7 @@ function render({ model, el }) {
           lastStamp = null;
           describeDue = true;
           scrub.max = String(run.meta.states - 1);
+          showViews();
         }
       }
       root.dataset.run = String(run ? run.id : -1);
@@ -654,6 +783,17 @@ function render({ model, el }) {
   for (const [name, listener] of Object.entries(listeners)) model.on(name, listener);
 
   // ---- controls --------------------------------------------------------------------------
+  function showViews() {
+    views.hidden = !inSpace();
+    help.textContent = inSpace() ? SPACE_HINT : PLANE_HINT;
+  }
+  function setView(turn, tilt) {
+    view = { turn, tilt: Math.min(Math.max(tilt, 0), TOP) };
+    dirty = true;
+  }
+  viewButtons["reset view"].addEventListener("click", () => setView(VIEW_START.turn, VIEW_START.tilt));
+  viewButtons.top.addEventListener("click", () => setView(0, TOP));
+  viewButtons.side.addEventListener("click", () => setView(0, 0));
   play.addEventListener("click", () => setPlaying(!playing));
   back.addEventListener("click", () => stepBy(-1));
   forward.addEventListener("click", () => stepBy(1));
@@ -706,23 +846,26 @@ function render({ model, el }) {
   });
 
   // ---- dragging a bob --------------------------------------------------------------------
+  // The pointer in metres: the picture's (across, up), in the top view the horizontal (x, y).
   function pointerMetres(event) {
     const rect = canvas.getBoundingClientRect();
     const px = ((event.clientX - rect.left) * WIDTH) / rect.width;
     const py = ((event.clientY - rect.top) * HEIGHT) / rect.height;
     const s = chainScale();
-    return [(px - pivot.x) / s, -(py - pivot.y) / s, px, py];
+    placePivot();
+    const [across, up] = [(px - pivot.x) / s, -(py - pivot.y) / s];
+    return [...(inSpace() ? unproject(across, up) : [across, up]), px, py];
   }
   canvas.addEventListener("pointerdown", (event) => {
-    if (!run || pending || event.button > 0) return;
+    if (!run || event.button > 0) return;
     const [, , px, py] = pointerMetres(event);
     const angles = anglesAt(t);
-    const [xs, ys] = positions(angles);
+    const [xs, ys, zs] = positions(angles);
     const s = chainScale();
     let best = -1;
     let bestDistance = Infinity;
     for (let j = 0; j < xs.length; j++) {
-      const [bx, by] = toCanvas(xs[j], ys[j], s);
+      const [bx, by] = screen(xs[j], ys[j], zs[j], s);
       const d = Math.hypot(px - bx, py - by);
       if (d <= bobRadius(j) + 10 && d < bestDistance) {
         best = j;
@@ -730,7 +873,18 @@ function render({ model, el }) {
       }
     }
     root.focus({ preventScroll: true });
-    if (best < 0) return;
+    if (inSpace() && (best < 0 || !topView() || pending) && px < CHAIN) {
+      // anything but a bob seen from above turns the view
+      if (best >= 0 && !topView()) {
+        setStatus("Seen at an angle, a place on the screen is no place in space: press “top” " +
+          "and drag the bob there to set where it starts (its height follows from the rod).");
+      }
+      event.preventDefault();
+      canvas.setPointerCapture(event.pointerId);
+      turning = { pointerId: event.pointerId, px, py, turn: view.turn, tilt: view.tilt };
+      return;
+    }
+    if (best < 0 || pending) return;
     const refusal = run.meta.figure.movable[best];
     if (refusal) {
       setStatus(refusal, "error"); // a point the coordinates do not place: say why, no drag
@@ -739,13 +893,27 @@ function render({ model, el }) {
     }
     event.preventDefault();
     canvas.setPointerCapture(event.pointerId);
-    dragging = { bob: best, angles, xs: Array.from(xs), ys: Array.from(ys), pointerId: event.pointerId };
+    dragging = { bob: best, angles, xs: Array.from(xs), ys: Array.from(ys), zs: Array.from(zs),
+      pointerId: event.pointerId,
+      // a point in space stays within its reach horizontally (DRAG_REACH)
+      reach: DRAG_REACH * Math.hypot(xs[best], ys[best], zs[best]) };
     root.dataset.dragging = String(best);
     dirty = true;
   });
+  // Where a drag in the top view puts a point in space: within its reach, horizontally.
+  function withinReach(x, y) {
+    const r = Math.hypot(x, y);
+    return inSpace() && r > dragging.reach ? [(x * dragging.reach) / r, (y * dragging.reach) / r] : [x, y];
+  }
   canvas.addEventListener("pointermove", (event) => {
+    if (turning && event.pointerId === turning.pointerId) {
+      const [, , px, py] = pointerMetres(event);
+      setView(turning.turn - (px - turning.px) * TURN_PER_PIXEL,
+        turning.tilt + (py - turning.py) * TURN_PER_PIXEL);
+      return;
+    }
     if (!dragging || event.pointerId !== dragging.pointerId) return;
-    const [x, y] = pointerMetres(event);
+    const [x, y] = withinReach(...pointerMetres(event));
     const k = dragging.bob;
     if (run.meta.figure.kind === "points") {
       // Only the kernel knows a system's coordinates: the point follows the pointer alone.
@@ -761,8 +929,12 @@ function render({ model, el }) {
     dirty = true;
   });
   canvas.addEventListener("pointerup", (event) => {
+    if (turning && event.pointerId === turning.pointerId) {
+      turning = null;
+      return;
+    }
     if (!dragging || event.pointerId !== dragging.pointerId) return;
-    const [x, y] = pointerMetres(event);
+    const [x, y] = withinReach(...pointerMetres(event));
     pending = true;
     delete root.dataset.dragging;
     root.dataset.release = `${x},${y}`;
@@ -770,6 +942,7 @@ function render({ model, el }) {
     dirty = true;
   });
   canvas.addEventListener("pointercancel", () => {
+    turning = null;
     dragging = null;
     delete root.dataset.dragging;
     dirty = true;

@@ -80,16 +80,17 @@ export function runMessages(run, module, params, config, id, chunkStates = CHUNK
   const states = Math.ceil(run.kept / stride);
   const figure = { ...config.figure };
   const count = figure.masses.length;
+  const width = module.DIMENSIONS || 2; // (x, y), or (x, y, z) for points in space
   const angles = new Float32Array(states * n);
   const energies = new Float32Array(states * 3);
   const error = new Float32Array(states);
-  const points = new Float32Array(figure.kind === "points" ? states * count * 2 : 0);
+  const points = new Float32Array(figure.kind === "points" ? states * count * width : 0);
   const energy0 = run.kinetic[0] + run.potential[0];
   let low = 0;
   let high = 0;
   let errorMax = 0;
   let reach = 0;
-  const place = new Float64Array(2 * module.POINTS);
+  const place = new Float64Array(width * module.POINTS);
   for (let k = 0; k < run.kept; k++) {
     const total = run.kinetic[k] + run.potential[k];
     // E - E(0) in float64 before the cast, as the kernel does
@@ -104,7 +105,7 @@ export function runMessages(run, module, params, config, id, chunkStates = CHUNK
     }
     if (figure.kind === "points") {
       module.positions(k * run.dt, run.theta.subarray(k * n, (k + 1) * n), params, place);
-      points.set(place, s * count * 2);
+      points.set(place, s * count * width);
       for (const c of place) if (Number.isFinite(c)) reach = Math.max(reach, Math.abs(c));
     }
   }
@@ -122,7 +123,7 @@ export function runMessages(run, module, params, config, id, chunkStates = CHUNK
     const last = Math.min(states, first + chunkStates);
     const part = (array, width) => new DataView(array.slice(first * width, last * width).buffer);
     const buffers = [part(angles, n), part(energies, 3), part(error, 1)];
-    if (figure.kind === "points") buffers.push(part(points, count * 2));
+    if (figure.kind === "points") buffers.push(part(points, count * width));
     messages.push([{ ...meta, chunk, first, count: last - first }, buffers]);
   }
   return messages;
@@ -134,7 +135,8 @@ export function runMessages(run, module, params, config, id, chunkStates = CHUNK
 export function releasedAngles(module, params, config, theta, bob, x, y) {
   if (![x, y].every(Number.isFinite)) throw new Error("the release point is not a finite number");
   const angles = Float64Array.from(theta);
-  const place = new Float64Array(2 * module.POINTS);
+  const width = module.DIMENSIONS || 2; // a point in space is placed by its (x, y)
+  const place = new Float64Array(width * module.POINTS);
   if (config.figure.kind === "chain") {
     module.positions(0, angles, params, place);
     const [jx, jy] = bob > 0 ? [place[2 * bob - 2], place[2 * bob - 1]] : [0, 0];
@@ -145,7 +147,7 @@ export function releasedAngles(module, params, config, theta, bob, x, y) {
     if (refusal) throw new Error(refusal);
     for (let sweep = 0; sweep < 50; sweep++) {
       module.positions(0, angles, params, place);
-      const residual = [place[2 * bob] - x, place[2 * bob + 1] - y];
+      const residual = [place[width * bob] - x, place[width * bob + 1] - y];
       if (Math.hypot(...residual) < 1e-12) break;
       // the 2 x n Jacobian by central differences, then the least-squares step
       const jacobian = [];
@@ -156,7 +158,7 @@ export function releasedAngles(module, params, config, theta, bob, x, y) {
           shifted[j] += sign * d;
           const out = new Float64Array(place.length);
           module.positions(0, shifted, params, out);
-          return [out[2 * bob], out[2 * bob + 1]];
+          return [out[width * bob], out[width * bob + 1]];
         });
         jacobian.push([(moved[0][0] - moved[1][0]) / (2 * d), (moved[0][1] - moved[1][1]) / (2 * d)]);
       }
