@@ -254,13 +254,15 @@ def live_data(p, index=0) -> dict:
 def test_the_kernel_free_simulator_plays_a_run_computed_in_the_browser(mounted):
     p = mounted
     first = live_data(p)
-    assert first["states"] == "1001" and first["playing"] == "1"
+    assert int(first["states"]) < 1001 and first["playing"] == "1"  # integrated as it plays
     p.wait_for_timeout(600)
     later = live_data(p)
     assert int(later["frames"]) > int(first["frames"]) + 10
     assert float(later["time"]) > float(first["time"]) + 0.3
+    assert int(later["states"]) > int(first["states"]) + 30
     status = p.locator(".plab-engine-status").first.text_content()
-    assert "1000 steps of glrk4 (Δt = 0.01 s) computed in the browser" in status
+    assert "1000 steps of glrk4 (Δt = 0.01 s) computed in the browser as the motion plays" \
+        in status
     assert p.locator(".plab-still").count() == 2  # the still picture stays for print
 
 
