@@ -93,10 +93,10 @@ def bench_browser(cfg: Config) -> Section:
             page.wait_for_function("() => document.querySelector('.plab-live')?.dataset.run"
                                    " === '1'", timeout=60_000)
             page.wait_for_timeout(500)
-            engine = "[...document.querySelectorAll('[data-engine=browser]')].map(e => ({...e.dataset}))"
-            before = page.evaluate(f"() => {engine}[0]")
+            engine = "({...document.querySelector('[data-engine=browser]').dataset})"
+            before = page.evaluate(f"() => {engine}")
             frames = page.evaluate(COUNT_FRAMES, int(cfg.live_browser_seconds * 1000))
-            after = page.evaluate(f"() => {engine}[0]")
+            after = page.evaluate(f"() => {engine}")
             version = page.context.browser.version
     except Exception as err:  # noqa: BLE001 - no Chromium here: say so
         for name in names:

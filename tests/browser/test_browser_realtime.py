@@ -127,7 +127,7 @@ def test_n_frames_take_the_steps_they_call_for_and_reach_the_methods_state(live)
           const e = await import(base + "/browser/engine.js");
           const m = await import(base + "/browser/models/double_pendulum.js");
           return [steps - 1, steps, steps + 1].map((k) => {
-            const r = e.simulate(m, [1, 1, 1, 1, 9.81], "glrk4", [2.0, 2.5], [0, 0], k * 0.01, 0.01);
+            const r = e.simulate(m, [1, 1, 1, 1, 9.81], "glrk4", [2, 2.5], [0, 0], k * 0.01, 0.01);
             return [...r.theta.slice(-2), ...r.p.slice(-2)];
           });
         }""", [base, steps])
