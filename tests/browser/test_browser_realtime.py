@@ -36,11 +36,14 @@ DT = 0.01
 #: Steps integrated ahead at the start (engine.js: LEAD_SECONDS / dt).
 LEAD_STEPS = 5
 
+#: A frame's computing budget far beyond what any frame here needs: the frames driven by hand
+#: are then limited by their steps alone, whatever the load of this machine.
+NO_TIME_LIMIT = {"frame_budget_ms": 1e9}
 HOLDERS = {  # id: (method, extra settings, stop the engine's own loop)
     "free": ("glrk4", {}, False),
-    "frames": ("glrk4", {}, True),
-    "capped": ("rk4", {"max_steps_per_frame": 3}, True),
-    "failing": ("glrk4", {}, True),
+    "frames": ("glrk4", NO_TIME_LIMIT, True),
+    "capped": ("rk4", {**NO_TIME_LIMIT, "max_steps_per_frame": 3}, True),
+    "failing": ("glrk4", NO_TIME_LIMIT, True),
 }
 
 
@@ -99,8 +102,9 @@ def test_the_trace_grows_while_it_plays_and_stops_growing_on_pause(live):
     playing = int(drawing(page, "free")["states"])
     assert playing > first + 10  # 0.4 s at 100 kept states a second
     assert int(drawing(page, "free")["states"]) < 1001  # not the whole run at once
+    text, kind = status(page, "free")  # on a loaded machine it may be falling behind, and say so
     assert "1000 steps of glrk4 (Δt = 0.01 s) computed in the browser as the motion plays" \
-        in status(page, "free")[0]
+        in text or kind == "behind", text
     page.locator("#free .plab-play").click()
     page.wait_for_function("() => document.querySelector('#free .plab-live').dataset.playing "
                            "=== '0'")
