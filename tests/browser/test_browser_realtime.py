@@ -10,7 +10,7 @@ kernel's run messages, one state per chunk. Checked here:
   of ``test_browser_engine`` times the steps;
 * a frame calling for more steps than the cap takes the cap and says it falls behind;
 * an implicit step that fails later in a run shows the kernel's sentence and the previous
-  motion goes on;
+  motion goes on; in a first run, with nothing to go back to, the run ends at its last step;
 * negative controls: a frame within the cap shows no note, one step more or fewer is another
   state, nothing fails before the failing step.
 
@@ -44,12 +44,13 @@ HOLDERS = {  # id: (method, extra settings, stop the engine's own loop)
     "frames": ("glrk4", NO_TIME_LIMIT, True),
     "capped": ("rk4", {**NO_TIME_LIMIT, "max_steps_per_frame": 3}, True),
     "failing": ("glrk4", NO_TIME_LIMIT, True),
+    "alone": ("leapfrog", {**NO_TIME_LIMIT, "dt": 0.1}, True),  # fails, nothing to go back to
 }
 
 
 @pytest.fixture(scope="module")
 def live(tmp_path_factory):
-    """A page with four kernel-free simulators of the double pendulum; three of them are moved
+    """A page with five kernel-free simulators of the double pendulum; four of them are moved
     on only by the test's calls of their ``frame``."""
     model = pl.double_pendulum()
     configs = {key: {**browser_config(model, method=method, t_end=10.0, dt=DT), **extra}
@@ -187,6 +188,20 @@ def test_a_step_that_fails_later_in_a_run_leaves_the_previous_motion_going_on(li
     frames(page, "failing", 40, 100.0)  # it goes on integrating where it had stopped
     assert integrated(page, "failing")["k"] > before["k"]
     assert page.errors == []
+
+
+def test_a_first_run_that_fails_later_ends_at_its_last_step_with_the_kernels_sentence(live):
+    page, _, _ = live
+    frames(page, "alone", 15, 100.0)
+    assert drawing(page, "alone")["run"] == "1" and status(page, "alone")[1] == "info"
+    frames(page, "alone", 10, 100.0)  # step 22 fails
+    text, kind = status(page, "alone")
+    assert kind == "error" and "did not converge within 100 iterations at step 22" in text
+    # the run, shown again as a new one, holds its 22 states (t = 0 to 2.1 s) and no more
+    page.wait_for_function("() => document.querySelector('#alone .plab-live').dataset.run "
+                           "=== '2'")
+    assert drawing(page, "alone")["states"] == "22"
+    assert frames(page, "alone", 5, 100.0) == 0  # and nothing is integrated any more
 
 
 def test_nothing_was_fetched_from_another_host(live):

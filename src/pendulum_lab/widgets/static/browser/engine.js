@@ -371,9 +371,10 @@ export async function mount(el, config) {
   function fallBack(error) {
     say(`The solver did not converge: ${error.message}. The previous motion goes on.`, "error");
     if (!previous) {
-      state.run.done = true; // nothing to go back to: the run ends where it stopped
-      state.run.completed = false;
-      deliver(state.run, 0);
+      // nothing to go back to: the run ends at its last step and plays again from its start
+      // (as a new run, so that the drawing takes its length)
+      state.run.done = true;
+      show(state.run);
       return;
     }
     [state.method, state.dt, state.theta, state.omega] = [previous.method, previous.dt, previous.theta, previous.omega];
