@@ -8,8 +8,12 @@
 2. **Real time.** The browser's steps per second against the 100 steps a second of simulated
    time needs at dt = 0.01. Target: at least 1.
 3. **Frames drawn per second** by the kernel-free simulator of a page (as the website mounts
-   it) while it plays, against a bare ``requestAnimationFrame`` counter in the same page (item
-   9's method). Target: at least 55 of 60.
+   it) while it plays and integrates in real time (each frame takes the steps the time elapsed
+   calls for), against a bare ``requestAnimationFrame`` counter in the same page (item 9's
+   method). Target: at least 55 of 60.
+4. **Steps per second integrated while it plays**, against the 100 a second real time needs at
+   dt = 0.01, and the frames that fell behind (took fewer steps than called for). Target: at
+   least 0.95 of real time (the count includes the first frame's wait).
 """
 
 from __future__ import annotations
@@ -57,9 +61,10 @@ def bench_browser(cfg: Config) -> Section:
     steps = round(T_END / DT)
     names = (f"steps per second, {METHOD} on the double pendulum, browser against kernel",
              "browser steps per second against real time (dt = 0.01)",
-             f"frames per second of the kernel-free simulator over {cfg.live_browser_seconds:g} s")
+             f"frames per second of the kernel-free simulator over {cfg.live_browser_seconds:g} s",
+             "steps per second integrated while it plays, against real time")
     if cfg.live_browser_seconds <= 0:
-        for name, target in zip(names, ("-", ">= 1", f">= {FRAME_SHARE:.3f}")):
+        for name, target in zip(names, ("-", ">= 1", f">= {FRAME_SHARE:.3f}", ">= 0.95")):
             rows.append(Row("16", name, "-", "-", "-", target, "not available"))
         details.append(f"Browser measurement not run in the {cfg.name} configuration.")
         return Section("browser", "16. Simulator without a kernel", rows, details, data)
@@ -88,14 +93,18 @@ def bench_browser(cfg: Config) -> Section:
             page.wait_for_function("() => document.querySelector('.plab-live')?.dataset.run"
                                    " === '1'", timeout=60_000)
             page.wait_for_timeout(500)
+            engine = "({...document.querySelector('[data-engine=browser]').dataset})"
+            before = page.evaluate(f"() => {engine}")
             frames = page.evaluate(COUNT_FRAMES, int(cfg.live_browser_seconds * 1000))
+            after = page.evaluate(f"() => {engine}")
             version = page.context.browser.version
     except Exception as err:  # noqa: BLE001 - no Chromium here: say so
         for name in names:
             rows.append(Row("16", name, "-", "-", "-", "-", "not available"))
         details.append(f"Browser measurement not available: {type(err).__name__}: {err}")
         return Section("browser", "16. Simulator without a kernel", rows, details, data)
-    data.update(kernel_seconds=kernel, browser_seconds=browser, frames=frames)
+    data.update(kernel_seconds=kernel, browser_seconds=browser, frames=frames,
+                engine_before=before, engine_after=after)
     browser_rate, kernel_rate = steps / median(browser), steps / median(kernel)
     rows.append(Row("16", names[0], f"{browser_rate:,.0f} steps/s (Chromium)",
                     f"kernel {kernel_rate:,.0f} steps/s (CPU)",
@@ -108,11 +117,17 @@ def bench_browser(cfg: Config) -> Section:
     rows.append(Row("16", names[2], f"{fps:.1f} fps", f"display (page's rAF) {display:.1f} Hz",
                     f"{fps / display:.3f}", f">= {FRAME_SHARE:.3f} (55 at 60 Hz)",
                     verdict(fps / display, FRAME_SHARE, at_most=False)))
+    integrated = (int(after["steps"]) - int(before["steps"])) / frames["elapsed"]
+    behind = int(after.get("behind", 0)) - int(before.get("behind", 0))
+    rows.append(Row("16", names[3], f"{integrated:,.0f} steps/s", f"real time {1 / DT:.0f} steps/s",
+                    f"{integrated * DT:.3f}", ">= 0.95",
+                    verdict(integrated * DT, 0.95, at_most=False)))
     load = (load_average() or [float("nan")])[0]
     details.append(
         f"Chromium {version} headless. Medians of {len(browser)} browser runs (performance.now, "
         f"wall) and {len(kernel)} kernel runs (CPU time) of {steps} steps, interleaved in "
-        f"groups of three; load average {load:.2f} on {os.cpu_count()} cores. The browser "
-        "computes a run once, then plays it; drawing one frame took "
-        f"{frames['drawMs']:.2f} ms on average.")
+        f"groups of three; load average {load:.2f} on {os.cpu_count()} cores. The page's simulator "
+        "integrates as it plays (a 60 s run, so the count ends before the run does); drawing "
+        f"one frame took {frames['drawMs']:.2f} ms on average; {behind} frame(s) fell behind "
+        "(took fewer steps than the time elapsed called for).")
     return Section("browser", "16. Simulator without a kernel", rows, details, data)

@@ -269,13 +269,16 @@ def live_data(p, index=0) -> dict:
 def test_the_kernel_free_simulator_plays_a_run_computed_in_the_browser(mounted):
     p = mounted
     first = live_data(p)
-    assert first["states"] == "1001" and first["playing"] == "1"
+    assert int(first["states"]) < 1001 and first["playing"] == "1"  # integrated as it plays
     p.wait_for_timeout(600)
     later = live_data(p)
     assert int(later["frames"]) > int(first["frames"]) + 10
     assert float(later["time"]) > float(first["time"]) + 0.3
-    status = p.locator(".plab-engine-status").first.text_content()
-    assert "1000 steps of glrk4 (Δt = 0.01 s) computed in the browser" in status
+    assert int(later["states"]) > int(first["states"]) + 30
+    status = p.locator(".plab-engine-status").first
+    # on a loaded machine it may be falling behind, and say so
+    assert "1000 steps of glrk4 (Δt = 0.01 s) computed in the browser as the motion plays" \
+        in status.text_content() or status.get_attribute("data-kind") == "behind"
     assert p.locator(".plab-still").count() == 2  # the still picture stays for print
 
 
@@ -285,8 +288,9 @@ def test_method_and_step_boxes_recompute_and_a_refused_method_says_why(mounted):
     p.wait_for_function("() => document.querySelector('.plab-live').dataset.run === '2'")
     p.locator("select[aria-label='time step']").first.select_option("0.02")
     p.wait_for_function("() => document.querySelector('.plab-live').dataset.run === '3'")
-    assert "500 steps of leapfrog (Δt = 0.02 s)" in p.locator(".plab-engine-status").first \
-        .text_content()
+    text = p.locator(".plab-engine-status").first.text_content()
+    assert "500 steps of leapfrog (Δt = 0.02 s)" in text \
+        or "steps of leapfrog (Δt = 0.02 s) this frame called for" in text  # loaded: behind
     driven = p.locator(".plab-browser-sim").nth(1)
     driven.locator("select[aria-label=method]").select_option("leapfrog")
     status = driven.locator(".plab-engine-status")

@@ -75,8 +75,13 @@ function newRun(header) {
   };
 }
 
+// What a run integrated as it plays (browser/engine.js) knows better with each chunk: its
+// length if it stops early, and the scales (energy range, largest error, reach) so far.
+const GROWING = ["states", "steps", "completed", "energy_range", "error_max", "figure"];
+
 function addChunk(run, header, buffers) {
   if (run.got.has(header.chunk)) return;
+  for (const key of GROWING) if (key in header) run.meta[key] = header[key];
   const n = header.links;
   const floats = (view) => new Float32Array(view.buffer, view.byteOffset, view.byteLength / 4);
   run.angles.set(floats(buffers[0]), header.first * n);
