@@ -27,14 +27,10 @@ import sympy as sp
 from .. import validation as check
 from ..codegen.kernels import load_system_kernels
 from ..symbolic.systems import MechanicalSystem, parameter_values
+from .drawing import Drawing
+from .family import FamilyMembers, broadcast_values
 from .numeric import compiled_system
-from .pendulum import (
-    Drawing,
-    FamilyMembers,
-    PendulumModel,
-    broadcast_values,
-    family_parameter,
-)
+from .pendulum import PendulumModel, family_parameter
 
 __all__ = [
     "SystemFamily",
