@@ -11,9 +11,16 @@ Submodules
     The symbolic engine: Taylor expansions of one step, modified vector
     fields, elementary Hamiltonians.
 ``backward_error``
-    :func:`modified_hamiltonian` for the pendulums, its numerical checks, the
-    attempted Hamiltonian fit of any expanded method's modified equation,
-    RK4's energy drift from its modified equation, global error growth.
+    The overview of backward error analysis, and every name of the three that follow.
+``modified_hamiltonians``
+    :func:`modified_hamiltonian` and :func:`modified_equation` for the pendulums, the
+    attempted Hamiltonian fit of any expanded method's modified equation.
+``modified_energy``
+    The modified Hamiltonian evaluated on states, and its checks along computed orbits.
+``energy_drift``
+    RK4's energy drift from its modified equation.
+``long_time``
+    Global error growth over long times.
 ``standard_map``
     Symplectic Euler on the pendulum as Chirikov's standard map; the median
     time of transport across the last invariant circle's remnant.
