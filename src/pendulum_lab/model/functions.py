@@ -46,9 +46,17 @@ class ModelFunctions:
                              f"{self._described()[0]}, got shape {array.shape}")
         return array
 
-    def mass_matrix_at(self, theta) -> np.ndarray:
-        """``M(theta)``, shape ``(..., n, n)``."""
-        return self._fn.mass_matrix(self._states("theta", theta), self._params)
+    def _configuration_time(self, t):
+        """The time the functions of the configuration take: the mass matrix, the momenta, the
+        energies, ``dH/dq``. A chain's do not depend on it (its pivot is fixed), so ``t`` is
+        accepted, not asked for and not used; a system whose points may move with the time
+        checks it as :meth:`_time` does."""
+        return 0.0
+
+    def mass_matrix_at(self, theta, t=None) -> np.ndarray:
+        """``M(theta)``, shape ``(..., n, n)`` (``M(q, t)`` where a system's points move)."""
+        return self._fn.mass_matrix(self._states("theta", theta), self._params,
+                                    self._configuration_time(t))
 
     def accelerations(self, theta, omega, t=None) -> np.ndarray:
         """``omega' = M(theta)^-1 (F(theta, omega) + Q(omega, t))``, shape ``(..., n)``.
@@ -71,30 +79,34 @@ class ModelFunctions:
         The right-hand side every integrator integrates (the compiled kernels
         compute the same). ``t`` is needed for a driven model only.
         """
-        theta = self._states("theta", theta)
-        omega = self.velocities(theta, p)
-        return omega, (self._fn.dlagrangian_dq(theta, omega, self._params)
-                       + self._fn.generalized_forces(theta, omega, self._params, self._time(t)))
+        theta, t = self._states("theta", theta), self._time(t)
+        omega = self.velocities(theta, p, t)
+        return omega, (self._fn.dlagrangian_dq(theta, omega, self._params, t)
+                       + self._fn.generalized_forces(theta, omega, self._params, t))
 
     def momenta(self, theta, omega, t=None) -> np.ndarray:
-        """``p = M(theta) omega`` (``t``, accepted as by every model, does not enter)."""
+        """``p = M(theta) omega``; ``M(q, t) omega + b(q, t)`` where a system's points move with
+        the time (a chain's momenta do not depend on ``t``)."""
         return self._fn.momenta(self._states("theta", theta), self._states("omega", omega),
-                                self._params)
+                                self._params, self._configuration_time(t))
 
     def velocities(self, theta, p, t=None) -> np.ndarray:
-        """``omega = M(theta)^-1 p`` (this is ``dH/dp``; ``t`` does not enter)."""
+        """``omega = M(theta)^-1 p`` (this is ``dH/dp``); ``M(q, t)^-1 (p - b(q, t))`` where a
+        system's points move with the time."""
         return self._fn.velocities(self._states("theta", theta), self._states("p", p),
-                                   self._params)
+                                   self._params, self._configuration_time(t))
 
     def kinetic_energy(self, theta, omega, t=None) -> np.ndarray:
-        """Kinetic energy (``t`` is accepted for the calling convention of every model; a chain's
-        energies do not depend on it)."""
+        """Kinetic energy ``T`` (of a system's points in the fixed frame where they move with
+        the time, as seen in the turning frame where they are written in one; a chain's does
+        not depend on ``t``)."""
         return self._fn.kinetic(self._states("theta", theta), self._states("omega", omega),
-                                self._params)
+                                self._params, self._configuration_time(t))
 
     def potential_energy(self, theta, t=None) -> np.ndarray:
-        """Potential energy, zero at the pivot's height."""
-        return self._fn.potential(self._states("theta", theta), self._params)
+        """Potential energy; a chain's is zero at the pivot's height."""
+        return self._fn.potential(self._states("theta", theta), self._params,
+                                  self._configuration_time(t))
 
     def energy(self, theta, omega, t=None) -> np.ndarray:
         return self.kinetic_energy(theta, omega, t) + self.potential_energy(theta, t)
@@ -106,13 +118,16 @@ class ModelFunctions:
     def dH_dp(self, theta, p, t=None) -> np.ndarray:
         return self.velocities(theta, p, t)
 
-    def dH_dq(self, theta, p) -> np.ndarray:
-        theta = self._states("theta", theta)
-        return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p), self._params)
+    def dH_dq(self, theta, p, t=None) -> np.ndarray:
+        theta, t = self._states("theta", theta), self._configuration_time(t)
+        return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p, t), self._params, t)
 
-    def hamiltonian_value(self, theta, p) -> np.ndarray:
-        """``H(theta, p)`` evaluated numerically."""
-        return self.energy(theta, self.velocities(theta, p))
+    def hamiltonian_value(self, theta, p, t=None) -> np.ndarray:
+        """``H(theta, p)`` evaluated numerically: ``T + V`` for a chain; for a system
+        ``1/2 omega^T M omega - L(q, 0, t)`` at ``omega = M^-1 (p - b)``, equal to ``T + V``
+        unless its points move with the time (``hamiltonian_is_energy``)."""
+        theta, t = self._states("theta", theta), self._configuration_time(t)
+        return self._fn.hamiltonian(theta, self.velocities(theta, p, t), self._params, t)
 
     def jacobian(self, theta, p, t=None) -> np.ndarray:
         """Jacobian of :meth:`vector_field` with respect to ``(theta, p)``, shape ``(..., 2n, 2n)``.
@@ -126,7 +141,7 @@ class ModelFunctions:
         theta = self._states("theta", theta)
         mass = self.mass_matrix_at(theta)
         omega = solve_small(mass, self._states("p", p))
-        args = (theta, omega, self._params)
+        args = (theta, omega, self._params, 0.0)  # a chain's pieces do not depend on t
         inv_mass = np.linalg.inv(mass)
         dw_dq = -inv_mass @ self._fn.dmomenta_dq(*args)
         rate_w = self._fn.lag_qw(*args)  # d(dp/dt)/d omega

@@ -272,61 +272,14 @@ class SystemModel(PendulumModel):
         return tuple(sorted(found, key=lambda eq: float(self.potential_energy(
             np.array(eq.angles, dtype=float), 0.0))))
 
-    # ---- numeric functions, each with the time ----------------------------------------
+    # ---- numeric functions: those of every model (ModelFunctions), with the time ---------
     def _described(self) -> tuple[str, str]:
         coordinates = ", ".join(map(str, self.system.q))
         return (f"{self.system.name} ({self.n} coordinates: {coordinates})",
                 f"the equations of {self.system.name} depend on the time")
 
-    def mass_matrix_at(self, theta, t=None) -> np.ndarray:
-        return self._fn.mass_matrix(self._states("theta", theta), self._params, self._time(t))
-
-    def accelerations(self, theta, omega, t=None) -> np.ndarray:
-        return self._fn.accelerations(self._states("theta", theta), self._states("omega", omega),
-                                      self._params, self._time(t))
-
-    def generalized_forces(self, theta, omega, t=None) -> np.ndarray:
-        return self._fn.generalized_forces(self._states("theta", theta),
-                                           self._states("omega", omega), self._params,
-                                           self._time(t))
-
-    def momenta(self, theta, omega, t=None) -> np.ndarray:
-        """``p = M(q, t) omega + b(q, t)``."""
-        return self._fn.momenta(self._states("theta", theta), self._states("omega", omega),
-                                self._params, self._time(t))
-
-    def velocities(self, theta, p, t=None) -> np.ndarray:
-        """``omega = M(q, t)^-1 (p - b(q, t))`` (this is ``dH/dp``)."""
-        return self._fn.velocities(self._states("theta", theta), self._states("p", p),
-                                   self._params, self._time(t))
-
-    def vector_field(self, theta, p, t=None):
-        theta, t = self._states("theta", theta), self._time(t)
-        omega = self.velocities(theta, p, t)
-        return omega, (self._fn.dlagrangian_dq(theta, omega, self._params, t)
-                       + self._fn.generalized_forces(theta, omega, self._params, t))
-
-    def kinetic_energy(self, theta, omega, t=None) -> np.ndarray:
-        """``T``: the points' kinetic energy (for a moving pivot, in the fixed frame; for
-        points written in a turning frame, as seen in that frame)."""
-        return self._fn.kinetic(self._states("theta", theta), self._states("omega", omega),
-                                self._params, self._time(t))
-
-    def potential_energy(self, theta, t=None) -> np.ndarray:
-        return self._fn.potential(self._states("theta", theta), self._params, self._time(t))
-
-    def dH_dq(self, theta, p, t=None) -> np.ndarray:
-        theta, t = self._states("theta", theta), self._time(t)
-        return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p, t), self._params, t)
-
-    def hamiltonian_value(self, theta, p, t=None) -> np.ndarray:
-        """``H = 1/2 omega^T M omega - L(q, 0, t)`` at ``omega = M^-1 (p - b)``; equal to
-        ``T + V`` unless the pivot moves (:attr:`hamiltonian_is_energy`)."""
-        theta, t = self._states("theta", theta), self._time(t)
-        omega = self.velocities(theta, p, t)
-        mass = self._fn.mass_matrix(theta, self._params, t)
-        quadratic = 0.5 * np.einsum("...i,...ij,...j->...", omega, mass, omega)
-        return quadratic - self._fn.lagrangian_rest(theta, self._params, t)
+    def _configuration_time(self, t):
+        return self._time(t)  # the points may move with the time (a moving pivot)
 
     def jacobian(self, theta, p, t=None) -> np.ndarray:
         """Jacobian of :meth:`vector_field` with respect to ``(q, p)``, shape ``(..., 2n, 2n)``."""
