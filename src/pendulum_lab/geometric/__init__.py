@@ -10,15 +10,12 @@ Submodules
 ``modified_equations``
     The symbolic engine: Taylor expansions of one step, modified vector
     fields, elementary Hamiltonians.
-``backward_error``
-    The overview of backward error analysis, and every name of the three that follow.
 ``modified_hamiltonians``
     :func:`modified_hamiltonian` and :func:`modified_equation` for the pendulums, the
     attempted Hamiltonian fit of any expanded method's modified equation.
-``modified_energy``
-    The modified Hamiltonian evaluated on states, and its checks along computed orbits.
-``energy_drift``
-    RK4's energy drift from its modified equation.
+``backward_error``
+    The numerical checks of that theory: the modified Hamiltonian evaluated along orbits,
+    RK4's energy drift from its modified equation (and the names above, importable here).
 ``long_time``
     Global error growth over long times.
 ``standard_map``
