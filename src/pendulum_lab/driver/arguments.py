@@ -199,7 +199,7 @@ def initial_state(model: PendulumModel, theta0, omega0, p0) -> tuple[np.ndarray,
 
 def run_arguments(model, theta0, omega0, p0, t_end, dt, method, save_every, t0,
                   allow_long_run: bool = False):
-    """The arguments of a run, validated in the order :func:`simulate` names them.
+    """The arguments of a run, validated in the order :func:`~pendulum_lab.simulate` names them.
 
     Also refuses, before any work: a run beyond :data:`WORK_BUDGET` unless ``allow_long_run``
     (:func:`check_run_length`), a ``save_every`` longer than the run, and a clock that would

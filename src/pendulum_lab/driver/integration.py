@@ -37,7 +37,8 @@ CHUNK_WORK = 200_000
 
 def warn_not_finite(method: Method, first_bad: int, t: float, count: int, members: int,
                     what_follows: str, stacklevel: int = 3) -> None:
-    """The one warning of a state that became non-finite (:func:`simulate` and :func:`step`).
+    """The one warning of a state that became non-finite (:func:`~pendulum_lab.simulate` and
+    :func:`~pendulum_lab.step`).
 
     Neither raises: the states computed are returned, and the warning says where the first
     non-finite one appeared and what the result holds from there.
@@ -53,7 +54,8 @@ def warn_not_finite(method: Method, first_bad: int, t: float, count: int, member
 def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape: tuple, *,
               t_end: float, dt: float, n_steps: int, save_every: int, t0: float, progress,
               memory=None, first_step: int = 0) -> Trajectory:
-    """The run of :func:`simulate` from validated arguments; ``q``, ``y`` are updated in place.
+    """The run of :func:`~pendulum_lab.simulate` from validated arguments; ``q``, ``y`` are
+    updated in place.
 
     ``compiled`` is the method compiled for the run's field
     (:func:`~pendulum_lab.driver.loops.compile_method`). ``q`` and ``y`` (shape ``(K, n)``,
@@ -64,7 +66,7 @@ def integrate(model: PendulumModel, compiled: CompiledMethod, q, y, batch_shape:
     ``t0`` (a multiple of ``save_every``), continues that run exactly: the same step times
     and saved times, computed from the step's number since ``t0``
     (:func:`pendulum_lab.simulate_segments` does). The callers have checked the memory needed
-    (:func:`check_memory`), before any work.
+    (:func:`~pendulum_lab.driver.arguments.check_memory`), before any work.
     """
     method = compiled.method
     n_saved = n_steps // save_every + 1

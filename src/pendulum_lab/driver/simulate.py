@@ -8,9 +8,10 @@ convention, the one of :func:`simulate`::
 the initial state first (angles, then angular velocities or, with ``p0``,
 canonical momenta), everything else by keyword. :func:`step_count` is the one
 rule that turns ``t_end`` and ``dt`` into a number of steps. The validation of
-these arguments and the limits of a run live in :mod:`.arguments`, the loop of a
-run from validated arguments (:func:`integrate`) in :mod:`.integration`, the result
-(:class:`Trajectory`) in :mod:`.trajectory`; their names are importable from here too.
+these arguments and the limits of a run live in :mod:`~pendulum_lab.driver.arguments`,
+the loop of a run from validated arguments (:func:`integrate`) in
+:mod:`~pendulum_lab.driver.integration`, the result (:class:`Trajectory`) in
+:mod:`~pendulum_lab.driver.trajectory`; their names are importable from here too.
 """
 
 from __future__ import annotations
@@ -313,8 +314,9 @@ def simulate(
     progress : bool, optional
         Show a progress bar; by default only for long runs.
     allow_long_run : bool
-        Run even beyond :data:`~.arguments.WORK_BUDGET` state updates (steps times
-        trajectories, hours of computing), which is otherwise refused before it
+        Run even beyond :data:`~pendulum_lab.driver.arguments.WORK_BUDGET` state
+        updates (steps times trajectories, hours of computing), which is otherwise
+        refused before it
         starts.
 
     Returns
@@ -348,9 +350,9 @@ def simulate(
     in an ensemble the other members go on and the blown-up one holds NaN.
     :func:`step` warns in the same words and returns the non-finite state.
 
-    Initial angles beyond :data:`~.trajectory.REDUCE_ANGLES_BEYOND` rad are reduced by whole
-    turns before stepping (:class:`AngleReduction`); the saved angles start at
-    ``theta0`` and are continuous, and the energies are computed accurately.
+    Initial angles beyond :data:`~pendulum_lab.driver.trajectory.REDUCE_ANGLES_BEYOND`
+    rad are reduced by whole turns before stepping (:class:`AngleReduction`); the saved
+    angles start at ``theta0`` and are continuous, and the energies are computed accurately.
     Ensemble members are integrated in parallel threads. For runs processed
     piece by piece (every step needed, too many to keep), see
     :func:`pendulum_lab.simulate_segments`.

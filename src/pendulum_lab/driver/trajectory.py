@@ -115,7 +115,8 @@ class AngleReduction:
     angles is what a caller computes from them as numbers (an angle plotted against time, a
     crossing of ``theta = 0`` rather than of ``0 mod 2 pi``): hence the angles given back. The
     drive is periodic in ``t``, but that is no reason to reduce the time, whose saved values
-    must stay the caller's: a huge ``t0`` is refused or warned about instead (:func:`check_clock`).
+    must stay the caller's: a huge ``t0`` is refused or warned about instead
+    (:func:`~pendulum_lab.driver.arguments.check_clock`).
 
     Far from zero, floats are spaced too widely for the small changes of a step (1e15 rad: 0.125
     rad apart, and a run there made relative energy errors of 1e3). So angles beyond

@@ -5,7 +5,7 @@ A bifurcation diagram needs the same pendulum at hundreds of drive amplitudes.
 Running them one by one would pay the run's fixed costs hundreds of times;
 the compiled time loop instead accepts one row of parameters per ensemble
 member (:class:`~pendulum_lab.integrators.HamiltonianField`). A
-:class:`ModelFamily` is the model side of that: a
+:class:`~pendulum_lab.model.ModelFamily` is the model side of that: a
 :class:`~pendulum_lab.PendulumModel` whose numbers are arrays, one entry per
 member. Its NumPy functions broadcast those arrays against the states (the
 lambdified functions take the parameters as arguments), so energies,
@@ -23,10 +23,10 @@ __all__ = ["FamilyMembers", "broadcast_values", "require_ensemble_fit"]
 
 
 class FamilyMembers:
-    """The members of a family (:class:`ModelFamily`, :class:`~pendulum_lab.model.SystemFamily`):
-    counted, picked, selected and broadcast to a run's ensemble. A family has ``base`` (the
-    model varied), ``values`` (``{name: array}``) and ``_mapped(transform)``, the same family
-    with ``transform`` applied to every array."""
+    """The members of a family (:class:`~pendulum_lab.model.ModelFamily`,
+    :class:`~pendulum_lab.model.SystemFamily`): counted, picked, selected and broadcast to a
+    run's ensemble. A family has ``base`` (the model varied), ``values`` (``{name: array}``)
+    and ``_mapped(transform)``, the same family with ``transform`` applied to every array."""
 
     def __len__(self) -> int:
         return int(np.prod(self.shape))

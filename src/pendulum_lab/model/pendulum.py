@@ -14,9 +14,10 @@ conservative chain, unchanged. Functions of a driven model's equations take
 the time ``t``.
 
 This module holds :class:`PendulumModel` and :class:`ModelFamily`, and the checks of a model
-argument; the numeric methods every model shares are in :mod:`.functions`, a chain's picture in
-:mod:`.drawing`, what every family shares in :mod:`.family`, the factories of chains in
-:mod:`.chains`, the numbers a chain accepts in :mod:`.parameters`.
+argument. The numeric methods every model shares are in :mod:`~pendulum_lab.model.functions`,
+a chain's picture in :mod:`~pendulum_lab.model.drawing`, what every family shares in
+:mod:`~pendulum_lab.model.family`, the factories of chains in :mod:`~pendulum_lab.model.chains`,
+the numbers a chain accepts in :mod:`~pendulum_lab.model.parameters`.
 
 Examples
 --------
@@ -74,8 +75,8 @@ __all__ = [
 class PendulumModel(ModelFunctions, ChainDrawing):
     """A planar chain of ``n`` pendulums with numeric masses, lengths, ``g`` and forces.
 
-    Build one with :func:`simple_pendulum`, :func:`driven_pendulum`,
-    :func:`double_pendulum` or :func:`n_pendulum`. Angles are absolute,
+    Build one with :func:`~pendulum_lab.simple_pendulum`, :func:`~pendulum_lab.driven_pendulum`,
+    :func:`~pendulum_lab.double_pendulum` or :func:`~pendulum_lab.n_pendulum`. Angles are absolute,
     measured from the downward vertical; ``theta``, ``omega`` (angular
     velocities) and ``p`` (canonical momenta) are arrays of shape ``(n,)`` or
     ``(..., n)``.
