@@ -6,12 +6,19 @@ model shares; ``chains`` the factories of chains; ``drawing`` what a picture of 
 ``family`` what every family shares; ``parameters`` the numbers a chain accepts; ``numeric``
 the functions of a chain (lambdified, or looped for long chains) and of any system; ``angles``
 the wrapping of angles; ``system`` :class:`SystemModel`, the model of any mechanical system
-(and :class:`SystemFamily`, many of them), and the factories of the elastic, the Kapitza and
-the cart pendulum.
+(and :class:`SystemFamily`, many of them); ``named_systems`` the factories of the elastic, the
+Kapitza, the cart, the spherical and the Foucault pendulum.
 """
 
 from .angles import reduce_turns, wrap_angle
 from .chains import double_pendulum, driven_pendulum, n_pendulum, simple_pendulum
+from .named_systems import (
+    cart_pendulum,
+    elastic_pendulum,
+    foucault_pendulum,
+    kapitza_pendulum,
+    spherical_pendulum,
+)
 from .pendulum import (
     FAMILY_PARAMETERS,
     Drawing,
@@ -22,16 +29,7 @@ from .pendulum import (
     require_double_pendulum,
     require_model,
 )
-from .system import (
-    SystemFamily,
-    SystemModel,
-    cart_pendulum,
-    elastic_pendulum,
-    foucault_pendulum,
-    kapitza_pendulum,
-    mechanical_system,
-    spherical_pendulum,
-)
+from .system import SystemFamily, SystemModel, mechanical_system
 
 __all__ = [
     "Drawing",

@@ -34,11 +34,11 @@ from ..model import (
     PendulumModel,
     double_pendulum,
     driven_pendulum,
+    elastic_pendulum,
     n_pendulum,
     require_model,
     simple_pendulum,
 )
-from ..model.system import elastic_pendulum
 from .channel import BROWSER_SETTINGS, STATIC, figure_message
 from .controls import SPEEDS, energy_changers, energy_is_conserved, forces_text
 
