@@ -166,6 +166,22 @@ def test_looped_model_functions_equal_the_lambdified_ones(forced):
                            lambdified.lag_qq(theta, omega, params, t), rtol=1e-9, atol=1e-9)
 
 
+def test_the_looped_functions_take_states_in_any_memory_order():
+    """A Fortran-ordered or broadcast batch (an ensemble's velocities given as one row repeated)
+    is copied to rows the compiled kernels are typed for, after a C-ordered batch was seen."""
+    chain = pl.n_pendulum(3)
+    rng = np.random.default_rng(5)
+    theta, omega = rng.uniform(-2, 2, (3, 3)), rng.normal(size=(3, 3))
+    expected = chain.accelerations(theta, omega)
+    for layout in (np.asfortranarray(omega), omega[:, ::-1][:, ::-1]):
+        assert np.array_equal(chain.accelerations(theta, layout), expected)
+    row = np.broadcast_to(omega[0], omega.shape)
+    assert np.array_equal(chain.accelerations(theta, row),
+                          chain.accelerations(theta, np.array(row)))
+    # negative control: other velocities give other accelerations
+    assert not np.array_equal(chain.accelerations(theta, np.asfortranarray(omega[::-1])), expected)
+
+
 def test_linear_time_solve_matches_a_dense_solve_up_to_the_largest_chain():
     n = pendulum.MAX_LINKS
     rng = np.random.default_rng(3)

@@ -281,7 +281,10 @@ class LoopedChain:
         full = (*shape, self.n)
 
         def rows_of(array, width):  # a writable C-ordered copy (the kernels take no views)
-            return np.array(np.broadcast_to(array, (*shape, width)).reshape(-1, width), float)
+            # order="C": a copy of a Fortran-ordered or broadcast input would keep its order,
+            # and rows of it are not the contiguous arrays the compiled kernels are typed for
+            return np.array(np.broadcast_to(array, (*shape, width)).reshape(-1, width), float,
+                            order="C")
 
         flat, others = rows_of(np.asarray(theta, float), self.n), rows_of(other, self.n)
         rows = table.reshape(1, -1) if table.ndim == 1 else rows_of(table, table.shape[-1])
