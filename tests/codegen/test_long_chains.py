@@ -146,11 +146,12 @@ def test_looped_model_functions_equal_the_lambdified_ones(forced):
     _, _, params, _ = _random_state(n, forced)
     t = rng.normal(size=4)
     calls = {
-        "mass_matrix": (theta, params), "potential": (theta, params),
-        "velocities": (theta, omega, params), "momenta": (theta, omega, params),
-        "dlagrangian_dq": (theta, omega, params), "kinetic": (theta, omega, params),
-        "lag_qq": (theta, omega, params), "lag_qw": (theta, omega, params),
-        "dmomenta_dq": (theta, omega, params), "forcing": (theta, omega, params, t),
+        "mass_matrix": (theta, params, t), "potential": (theta, params, t),
+        "velocities": (theta, omega, params, t), "momenta": (theta, omega, params, t),
+        "dlagrangian_dq": (theta, omega, params, t), "kinetic": (theta, omega, params, t),
+        "hamiltonian": (theta, omega, params, t),
+        "lag_qq": (theta, omega, params, t), "lag_qw": (theta, omega, params, t),
+        "dmomenta_dq": (theta, omega, params, t), "forcing": (theta, omega, params, t),
         "accelerations": (theta, omega, params, t),
         "generalized_forces": (theta, omega, params, t), "damping_matrix": (params,),
     }
@@ -161,8 +162,24 @@ def test_looped_model_functions_equal_the_lambdified_ones(forced):
     # Negative control: the first link's angle moved a little.
     moved = theta.copy()
     moved[:, 0] += 1e-4
-    assert not np.allclose(looped.lag_qq(moved, omega, params),
-                           lambdified.lag_qq(theta, omega, params), rtol=1e-9, atol=1e-9)
+    assert not np.allclose(looped.lag_qq(moved, omega, params, t),
+                           lambdified.lag_qq(theta, omega, params, t), rtol=1e-9, atol=1e-9)
+
+
+def test_the_looped_functions_take_states_in_any_memory_order():
+    """A Fortran-ordered or broadcast batch (an ensemble's velocities given as one row repeated)
+    is copied to rows the compiled kernels are typed for, after a C-ordered batch was seen."""
+    chain = pl.n_pendulum(3)
+    rng = np.random.default_rng(5)
+    theta, omega = rng.uniform(-2, 2, (3, 3)), rng.normal(size=(3, 3))
+    expected = chain.accelerations(theta, omega)
+    for layout in (np.asfortranarray(omega), omega[:, ::-1][:, ::-1]):
+        assert np.array_equal(chain.accelerations(theta, layout), expected)
+    row = np.broadcast_to(omega[0], omega.shape)
+    assert np.array_equal(chain.accelerations(theta, row),
+                          chain.accelerations(theta, np.array(row)))
+    # negative control: other velocities give other accelerations
+    assert not np.array_equal(chain.accelerations(theta, np.asfortranarray(omega[::-1])), expected)
 
 
 def test_linear_time_solve_matches_a_dense_solve_up_to_the_largest_chain():

@@ -25,7 +25,7 @@ import pytest
 
 import pendulum_lab as pl
 from pendulum_lab import validation
-from pendulum_lab.driver import segments
+from pendulum_lab.driver import arguments, segments, trajectory
 from pendulum_lab.integrators import get_method
 from pendulum_lab.model import reduce_turns
 
@@ -52,7 +52,7 @@ def test_runs_beyond_the_budget_are_refused_at_once_with_the_count(kwargs, steps
 
 
 def test_the_budget_counts_trajectories_and_allow_long_run_lifts_it(monkeypatch):
-    monkeypatch.setattr(driver, "WORK_BUDGET", 1000)
+    monkeypatch.setattr(arguments, "WORK_BUDGET", 1000)
     theta0 = np.full((4, 2), 0.5)
     # 300 steps of one trajectory fit; of four (1,200 updates) they do not ...
     pl.simulate(DP, theta0[0], np.zeros(2), t_end=3.0, dt=0.01, method="rk4")
@@ -115,7 +115,7 @@ def test_the_memory_estimate_covers_what_a_run_really_holds(n, method, members, 
 
 def test_memory_is_checked_before_any_start_up_work(monkeypatch):
     monkeypatch.setattr(validation, "available_memory", lambda: 10**6)
-    monkeypatch.setattr(driver, "SMALL_RUN", 0)  # ask about every run
+    monkeypatch.setattr(arguments, "SMALL_RUN", 0)  # ask about every run
 
     def no_start_up(*args, **kwargs):
         raise AssertionError("the start-up work ran before the memory check")
@@ -140,7 +140,7 @@ def test_the_memory_check_counts_each_methods_working_memory(monkeypatch):
     members, n = 10_000, 2
     needed = {m: driver.memory_needed(n, get_method(m), members, 2) for m in ("rk4", "glrk8")}
     monkeypatch.setattr(validation, "available_memory", lambda: int(sum(needed.values()) / 2))
-    monkeypatch.setattr(driver, "SMALL_RUN", 0)
+    monkeypatch.setattr(arguments, "SMALL_RUN", 0)
     theta0 = np.full((members, n), 0.3)
     pl.simulate(DP, theta0, np.zeros_like(theta0), t_end=0.01, dt=0.01, method="rk4")
     with pytest.raises(ValueError, match="needs about"):
@@ -195,7 +195,8 @@ def test_a_run_from_huge_angles_is_the_run_from_the_reduced_ones(model, method, 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # the saved angles' rounding
         traj = pl.simulate(model, theta0, omega0, t_end=10.0, dt=0.01, method=method)
-    reduced = np.where(np.abs(theta0) > driver.REDUCE_ANGLES_BEYOND, reduce_turns(theta0), theta0)
+    reduced = np.where(np.abs(theta0) > trajectory.REDUCE_ANGLES_BEYOND, reduce_turns(theta0),
+                       theta0)
     plain = pl.simulate(model, reduced, omega0, t_end=10.0, dt=0.01, method=method)
     # the motion is computed on the reduced angles: energies and momenta to the last bit ...
     assert np.array_equal(traj.energy, plain.energy) and np.array_equal(traj.p, plain.p)
@@ -213,7 +214,7 @@ def test_without_the_reduction_huge_angles_ruin_the_run(monkeypatch):
     assert np.max(np.abs(reduced.relative_energy_error)) < 1e-2
     # negative control: stepping the huge angles themselves (as before) gives a relative energy
     # error of order 1e3
-    monkeypatch.setattr(driver, "REDUCE_ANGLES_BEYOND", np.inf)
+    monkeypatch.setattr(trajectory, "REDUCE_ANGLES_BEYOND", np.inf)
     plain = pl.simulate(DP, [1e15, 0.0], [0.0, 0.0], t_end=10.0, dt=0.01, method="rk4")
     assert np.max(np.abs(plain.relative_energy_error)) > 1
 
@@ -312,6 +313,6 @@ def test_a_segmented_run_restarted_at_huge_angles_reduces_them_too(monkeypatch):
     assert np.array_equal(after.energy[:, 0], fresh.energy)
     # negative control: without the reduction the restarted member steps at 1e12 rad, where
     # floats are 1.2e-4 rad apart, and its energy is not the fresh run's
-    monkeypatch.setattr(driver, "REDUCE_ANGLES_BEYOND", np.inf)
+    monkeypatch.setattr(trajectory, "REDUCE_ANGLES_BEYOND", np.inf)
     unreduced = _restarted_at_a_huge_angle()
     assert np.max(np.abs(unreduced.energy[:, 0] - fresh.energy)) > 1e-6

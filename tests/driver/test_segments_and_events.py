@@ -168,7 +168,7 @@ def test_the_memory_check_counts_the_kept_states(monkeypatch):
     from pendulum_lab import validation
 
     monkeypatch.setattr(validation, "available_memory", lambda: 1_000_000)
-    monkeypatch.setattr(importlib.import_module("pendulum_lab.driver.simulate"), "SMALL_RUN", 0)
+    monkeypatch.setattr(importlib.import_module("pendulum_lab.driver.arguments"), "SMALL_RUN", 0)
     # 100,001 states x (9 * 2 + 3) floats x 8 bytes = 16.8 MB > 1 MB: refused ...
     with pytest.raises(ValueError, match="needs about 16.8 MB"):
         pl.simulate(DP, [1.0, 1.0], [0.0, 0.0], t_end=10.0, dt=1e-4, method="rk4")

@@ -86,6 +86,27 @@ def test_kapitza_momentum_depends_on_time_and_needs_it(kapitza):
         kapitza.momenta([1.0], [0.0])
 
 
+def test_one_set_of_model_methods_serves_chains_and_systems(kapitza):
+    """A chain's compiled functions take the time and ignore it, so a system overrides none of
+    the numeric methods only to pass the time; where the time enters, it is used."""
+    from pendulum_lab.model import SystemModel
+    from pendulum_lab.model.functions import ModelFunctions
+
+    shared = {"mass_matrix_at", "accelerations", "generalized_forces", "vector_field", "momenta",
+              "velocities", "kinetic_energy", "potential_energy", "dH_dq", "hamiltonian_value"}
+    assert shared <= set(vars(ModelFunctions)) and not shared & set(vars(SystemModel))
+    assert "jacobian" in vars(SystemModel)  # negative control: an override is seen
+    driven, theta, p = pl.driven_pendulum(), np.array([0.4]), np.array([0.2])
+    for name in ("mass_matrix_at", "hamiltonian_value", "dH_dq"):
+        args = (theta,) if name == "mass_matrix_at" else (theta, p)
+        assert np.array_equal(getattr(driven, name)(*args, t=3.0), getattr(driven, name)(*args))
+    # negative controls: the drive and a shaken pivot depend on the time
+    assert not np.array_equal(driven.vector_field(theta, p, t=0.0)[1],
+                              driven.vector_field(theta, p, t=3.0)[1])
+    assert not np.array_equal(kapitza.hamiltonian_value([1.0], [0.5], t=0.0),
+                              kapitza.hamiltonian_value([1.0], [0.5], t=0.01))
+
+
 def test_cart_conserves_horizontal_momentum():
     cart = pl.cart_pendulum()
     run = pl.simulate(cart, [0.0, 2.0], [0.3, 0.0], t_end=20.0, dt=0.01, method="glrk4")

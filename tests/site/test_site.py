@@ -164,9 +164,9 @@ def test_every_name_a_package_exports_is_documented(course_site):
     ]
     assert not missing, missing
     # Negative control: a private function (no public module lists it, so it has no page).
-    from pendulum_lab.model.pendulum import _size
+    from pendulum_lab.model.numeric import _lambdify
 
-    assert not _api_anchors(course_site.output, _size)
+    assert not _api_anchors(course_site.output, _lambdify)
 
 
 def test_no_launch_link_while_the_repository_is_unset(course_site):

@@ -39,7 +39,7 @@ from .. import analysis, plotting
 from .. import validation as check
 from ..driver.simulate import Trajectory
 from ..integrators import METHODS, get_method
-from ..model.pendulum import double_pendulum, simple_pendulum
+from ..model import double_pendulum, simple_pendulum
 from ..version import __version__
 from .tables import markdown_table
 

@@ -17,7 +17,7 @@ from sympy.core.cache import clear_cache
 from .. import validation as check
 from ..driver.simulate import simulate, time_grid
 from ..integrators import get_method
-from ..model.pendulum import n_pendulum
+from ..model import n_pendulum
 from ..symbolic.mechanics import Chain
 
 __all__ = ["ChainCost", "FirstUseCost", "chain_costs", "first_use_cost"]

@@ -40,7 +40,7 @@ from ..integrators import (
     get_method,
     unsuitability,
 )
-from ..model.pendulum import driven_pendulum, n_pendulum
+from ..model import driven_pendulum, n_pendulum
 
 __all__ = [
     "BackgroundWarmUp",

@@ -250,8 +250,9 @@ class LoopedChain:
     """The numeric functions of a chain of ``n`` links, for :class:`~pendulum_lab.PendulumModel`.
 
     The same methods as the lambdified functions of a short chain
-    (``pendulum_lab.model.pendulum._CompiledChain``), each taking states of shape
-    ``(..., n)`` and ``params`` in the order of ``Chain.parameters``: the
+    (:class:`~pendulum_lab.model.numeric.CompiledChain`), each taking states of shape
+    ``(..., n)``, ``params`` in the order of ``Chain.parameters`` and the time ``t`` (used by
+    the drive only): the
     vector field, momenta, velocities and energies in ``O(n)`` per state (the
     loops above), the ``n x n`` matrices (``M`` and the second derivatives of
     ``L`` that :meth:`~pendulum_lab.PendulumModel.jacobian` needs) from their
@@ -280,7 +281,10 @@ class LoopedChain:
         full = (*shape, self.n)
 
         def rows_of(array, width):  # a writable C-ordered copy (the kernels take no views)
-            return np.array(np.broadcast_to(array, (*shape, width)).reshape(-1, width), float)
+            # order="C": a copy of a Fortran-ordered or broadcast input would keep its order,
+            # and rows of it are not the contiguous arrays the compiled kernels are typed for
+            return np.array(np.broadcast_to(array, (*shape, width)).reshape(-1, width), float,
+                            order="C")
 
         flat, others = rows_of(np.asarray(theta, float), self.n), rows_of(other, self.n)
         rows = table.reshape(1, -1) if table.ndim == 1 else rows_of(table, table.shape[-1])
@@ -309,16 +313,16 @@ class LoopedChain:
         return np.cos(angle), np.sin(angle)
 
     # ---- the model's functions ----------------------------------------------
-    def mass_matrix(self, theta, params):
+    def mass_matrix(self, theta, params, t):
         return self._coupling(params) * self._differences(theta)[0]
 
-    def velocities(self, theta, p, params):
+    def velocities(self, theta, p, params, t):
         return self._batch(VELOCITIES, theta, p, params)
 
-    def momenta(self, theta, omega, params):
+    def momenta(self, theta, omega, params, t):
         return self._batch(MOMENTA, theta, omega, params)
 
-    def dlagrangian_dq(self, theta, omega, params):
+    def dlagrangian_dq(self, theta, omega, params, t):
         return self._batch(RATES, theta, omega, params)
 
     def forcing(self, theta, omega, params, t):
@@ -330,13 +334,17 @@ class LoopedChain:
     def generalized_forces(self, theta, omega, params, t):
         return self._batch(FORCES, theta, omega, params, t)
 
-    def kinetic(self, theta, omega, params):
+    def kinetic(self, theta, omega, params, t):
         omega = np.asarray(omega, float)
-        return 0.5 * np.sum(omega * self.momenta(theta, omega, params), axis=-1)
+        return 0.5 * np.sum(omega * self.momenta(theta, omega, params, t), axis=-1)
 
-    def potential(self, theta, params):
+    def potential(self, theta, params, t):
         tails, lengths, g = self._tails(params)
         return -g * np.sum(tails * lengths * np.cos(np.asarray(theta, float)), axis=-1)
+
+    def hamiltonian(self, theta, omega, params, t):
+        """``H = T + V`` at the velocities ``omega``."""
+        return self.kinetic(theta, omega, params, t) + self.potential(theta, params, t)
 
     def damping_matrix(self, params) -> np.ndarray:
         """``C``, tridiagonal: ``C_ii = c_i + c_(i+1)``, ``C_(i,i+1) = -c_(i+1)``; (..., n, n)."""
@@ -355,7 +363,7 @@ class LoopedChain:
     # Second derivatives of L, with a = mu_max(i,j) l_i l_j and the off-diagonal
     # entries first; each diagonal entry is minus the sum of its row's others
     # (plus the gravity term), because the sums leave j = i out.
-    def lag_qq(self, theta, omega, params):
+    def lag_qq(self, theta, omega, params, t):
         """``d^2 L / dtheta dtheta``: ``a_ik cos(theta_i - theta_k) omega_i omega_k`` off the
         diagonal; ``-sum_(j != i) (those) - g mu_i l_i cos(theta_i)`` on it."""
         omega = np.asarray(omega, float)
@@ -365,7 +373,7 @@ class LoopedChain:
         gravity = -np.asarray(g)[..., None] * tails * lengths * np.cos(np.asarray(theta, float))
         return self._with_diagonal(off, gravity)
 
-    def lag_qw(self, theta, omega, params):
+    def lag_qw(self, theta, omega, params, t):
         """``d^2 L / dtheta domega``: ``-a_ik sin(theta_i - theta_k) omega_i`` off the diagonal;
         ``-sum_(j != i) a_ij sin(theta_i - theta_j) omega_j`` on it."""
         omega = np.asarray(omega, float)
@@ -375,7 +383,7 @@ class LoopedChain:
         diagonal = -np.einsum("...ij,...j->...i", a_sin, omega)
         return self._with_diagonal(off, diagonal, subtract=False)
 
-    def dmomenta_dq(self, theta, omega, params):
+    def dmomenta_dq(self, theta, omega, params, t):
         """``d(M omega) / dtheta``: ``a_ik sin(theta_i - theta_k) omega_k`` off the diagonal;
         ``-sum_(j != i)`` (those) on it."""
         omega = np.asarray(omega, float)

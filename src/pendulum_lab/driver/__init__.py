@@ -1,6 +1,8 @@
 """The driver layer: a model, a method and a time grid make a trajectory.
 
-``simulate`` (runs and single steps), ``loops`` (the compiled time loop of each method on each
+``simulate`` (runs and single steps), ``arguments`` (a run's arguments validated, and its
+limits), ``integration`` (the run from validated arguments), ``trajectory`` (the result),
+``loops`` (the compiled time loop of each method on each
 field), ``segments`` (long runs handed out piece by piece), ``events`` (crossings located
 between steps), ``henon`` (Henon's step onto a surface of section) and ``cluster`` (ensembles
 on a Dask cluster).

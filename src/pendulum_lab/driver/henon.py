@@ -19,8 +19,9 @@ from ..codegen import kernels as codegen
 from ..codegen.cache import load_generated
 from ..integrators import HamiltonianField, get_method
 from ..model import PendulumModel, require_model
+from .arguments import initial_state
 from .loops import compile_method
-from .simulate import check_method_fits, hamiltonian_field, initial_state
+from .simulate import check_method_fits, hamiltonian_field
 
 __all__ = ["henon_step"]
 

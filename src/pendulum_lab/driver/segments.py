@@ -37,20 +37,11 @@ import numpy as np
 from .. import validation as check
 from ..codegen.compile_status import compile_seconds
 from ..model import PendulumModel
+from .arguments import check_memory, check_progress, memory_needed, progress_bar, run_arguments
+from .integration import integrate
 from .loops import compile_method
-from .simulate import (
-    AngleReduction,
-    Trajectory,
-    check_memory,
-    check_method_fits,
-    check_progress,
-    hamiltonian_field,
-    integrate,
-    memory_needed,
-    progress_bar,
-    run_arguments,
-    to_method_variables,
-)
+from .simulate import check_method_fits, hamiltonian_field, to_method_variables
+from .trajectory import AngleReduction, Trajectory
 
 __all__ = ["SegmentedRun", "default_segment_steps", "segment_length", "simulate_segments"]
 

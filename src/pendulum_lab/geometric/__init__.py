@@ -10,10 +10,14 @@ Submodules
 ``modified_equations``
     The symbolic engine: Taylor expansions of one step, modified vector
     fields, elementary Hamiltonians.
+``modified_hamiltonians``
+    :func:`modified_hamiltonian` and :func:`modified_equation` for the pendulums, the
+    attempted Hamiltonian fit of any expanded method's modified equation.
 ``backward_error``
-    :func:`modified_hamiltonian` for the pendulums, its numerical checks, the
-    attempted Hamiltonian fit of any expanded method's modified equation,
-    RK4's energy drift from its modified equation, global error growth.
+    The numerical checks of that theory: the modified Hamiltonian evaluated along orbits,
+    RK4's energy drift from its modified equation (and the names above, importable here).
+``long_time``
+    Global error growth over long times.
 ``standard_map``
     Symplectic Euler on the pendulum as Chirikov's standard map; the median
     time of transport across the last invariant circle's remnant.

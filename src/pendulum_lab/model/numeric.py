@@ -51,9 +51,11 @@ class CompiledChain:
     """The lambdified functions of one :class:`~pendulum_lab.symbolic.mechanics.Chain` (a short
     one).
 
-    Each method takes states of shape ``(..., n)`` and ``params`` in the order
-    of ``Chain.parameters``; :class:`~pendulum_lab.codegen.long_chains.LoopedChain`
-    has the same methods for long chains.
+    Each method takes states of shape ``(..., n)``, ``params`` in the order of
+    ``Chain.parameters`` and the time ``t``, as :class:`CompiledSystem`'s do, so that one set of
+    model methods serves chains and systems; only the drive uses ``t`` (in ``forcing``,
+    ``accelerations``, ``generalized_forces``), the other methods ignore it.
+    :class:`~pendulum_lab.codegen.long_chains.LoopedChain` has the same methods for long chains.
     """
 
     def __init__(self, chain: Chain):
@@ -78,43 +80,48 @@ class CompiledChain:
         self._dmomenta_dq = _lambdify(state_args, lag_dw.jacobian(q), (n, n))
         self.separable = not (chain.mass_matrix.free_symbols & set(q))
 
-    def mass_matrix(self, theta, params):
+    def mass_matrix(self, theta, params, t):
         return self._mass_matrix(*_config(theta, params))
 
-    def velocities(self, theta, p, params):
-        return solve_small(self.mass_matrix(theta, params), np.asarray(p, float))
+    def velocities(self, theta, p, params, t):
+        return solve_small(self.mass_matrix(theta, params, t), np.asarray(p, float))
 
-    def momenta(self, theta, omega, params):
-        return np.einsum("...ij,...j->...i", self.mass_matrix(theta, params), omega)
+    def momenta(self, theta, omega, params, t):
+        return np.einsum("...ij,...j->...i", self.mass_matrix(theta, params, t), omega)
 
-    def dlagrangian_dq(self, theta, omega, params):
+    def dlagrangian_dq(self, theta, omega, params, t):
         return self._dlagrangian_dq(*_state(theta, omega, params))
 
     def forcing(self, theta, omega, params, t):
         return self._forcing(*_state(theta, omega, params), t)
 
     def accelerations(self, theta, omega, params, t):
-        return solve_small(self.mass_matrix(theta, params), self.forcing(theta, omega, params, t))
+        return solve_small(self.mass_matrix(theta, params, t),
+                           self.forcing(theta, omega, params, t))
 
     def generalized_forces(self, theta, omega, params, t):
         return self._generalized_forces(*_state(theta, omega, params), t)
 
-    def kinetic(self, theta, omega, params):
+    def kinetic(self, theta, omega, params, t):
         return self._kinetic(*_state(theta, omega, params))
 
-    def potential(self, theta, params):
+    def potential(self, theta, params, t):
         return self._potential(*_config(theta, params))
+
+    def hamiltonian(self, theta, omega, params, t):
+        """``H = T + V`` at the velocities ``omega``."""
+        return self.kinetic(theta, omega, params, t) + self.potential(theta, params, t)
 
     def damping_matrix(self, params):
         return self._damping_matrix(*params)
 
-    def lag_qq(self, theta, omega, params):
+    def lag_qq(self, theta, omega, params, t):
         return self._lag_qq(*_state(theta, omega, params))
 
-    def lag_qw(self, theta, omega, params):
+    def lag_qw(self, theta, omega, params, t):
         return self._lag_qw(*_state(theta, omega, params))
 
-    def dmomenta_dq(self, theta, omega, params):
+    def dmomenta_dq(self, theta, omega, params, t):
         return self._dmomenta_dq(*_state(theta, omega, params))
 
 
@@ -151,10 +158,11 @@ def solve_small(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 class CompiledSystem:
     """The lambdified functions of a :class:`~pendulum_lab.symbolic.systems.MechanicalSystem`.
 
-    The methods of :class:`CompiledChain`, each with the time ``t`` as last argument (a
-    moving pivot makes the mass matrix, the momenta and the energies depend on it), plus
-    ``momentum_offset`` (``b`` of ``p = M omega + b``), ``lagrangian_rest`` (``L`` at rest)
-    and the points' ``positions``. Same helpers as a chain's (``_lambdify``, ``solve_small``).
+    The methods of :class:`CompiledChain` (the time ``t`` last: a moving pivot makes the mass
+    matrix, the momenta and the energies depend on it), plus ``momentum_offset`` (``b`` of
+    ``p = M omega + b``), ``lagrangian_rest`` (``L`` at rest), the Jacobian's pieces ``rate_q``
+    and ``rate_w`` (the forces included) and the points' ``positions``. Same helpers as a
+    chain's (``_lambdify``, ``solve_small``).
     """
 
     def __init__(self, system):
@@ -220,6 +228,12 @@ class CompiledSystem:
 
     def lagrangian_rest(self, q, params, t):
         return self._rest(*_config(q, (*params, t)))
+
+    def hamiltonian(self, q, omega, params, t):
+        """``H = 1/2 omega^T M omega - L(q, 0, t)`` at the velocities ``omega``."""
+        mass = self.mass_matrix(q, params, t)
+        quadratic = 0.5 * np.einsum("...i,...ij,...j->...", omega, mass, omega)
+        return quadratic - self.lagrangian_rest(q, params, t)
 
     def rate_q(self, q, omega, params, t):
         return self._rate_q(*_state(q, omega, (*params, t)))

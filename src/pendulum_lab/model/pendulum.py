@@ -13,17 +13,11 @@ uses the forced chain of :mod:`pendulum_lab.symbolic.mechanics`; without them it
 conservative chain, unchanged. Functions of a driven model's equations take
 the time ``t``.
 
-A bifurcation diagram needs the same pendulum at hundreds of drive amplitudes.
-Running them one by one would pay the run's fixed costs hundreds of times;
-the compiled time loop instead accepts one row of parameters per ensemble
-member (:class:`~pendulum_lab.integrators.HamiltonianField`). A
-:class:`ModelFamily` is the model side of that: a
-:class:`~pendulum_lab.PendulumModel` whose numbers are arrays, one entry per
-member. Its NumPy functions broadcast those arrays against the states (the
-lambdified functions take the parameters as arguments), so energies,
-momenta and Jacobians of the whole family come out of one call, and
-:func:`~pendulum_lab.simulate` and :func:`~pendulum_lab.simulate_segments`
-run it like any model.
+This module holds :class:`PendulumModel` and :class:`ModelFamily`, and the checks of a model
+argument. The numeric methods every model shares are in :mod:`~pendulum_lab.model.functions`,
+a chain's picture in :mod:`~pendulum_lab.model.drawing`, what every family shares in
+:mod:`~pendulum_lab.model.family`, the factories of chains in :mod:`~pendulum_lab.model.chains`,
+the numbers a chain accepts in :mod:`~pendulum_lab.model.parameters`.
 
 Examples
 --------
@@ -38,116 +32,51 @@ True
 from __future__ import annotations
 
 import functools
-import math
-from dataclasses import dataclass
 
 import numpy as np
 import sympy as sp
 
 from .. import validation as check
 from ..symbolic.mechanics import derive_chain
-from .numeric import compiled_chain, solve_small
+from .drawing import ChainDrawing, Drawing
+from .family import FamilyMembers, broadcast_values, require_ensemble_fit
+from .functions import ModelFunctions
+from .numeric import compiled_chain
+from .parameters import (
+    FAMILY_PARAMETERS,
+    MAX_LINKS,
+    MAX_LINKS_REASON,
+    PARAMETER_RANGE,
+    PARAMETER_RANGE_REASON,
+    check_range,
+    link_count,
+    model_number,
+)
 
 __all__ = [
     "FAMILY_PARAMETERS",
+    "MAX_LINKS",
+    "MAX_LINKS_REASON",
+    "PARAMETER_RANGE",
+    "PARAMETER_RANGE_REASON",
     "Drawing",
+    "FamilyMembers",
     "ModelFamily",
     "PendulumModel",
-    "double_pendulum",
-    "driven_pendulum",
-    "n_pendulum",
+    "broadcast_values",
     "family_parameter",
     "require_chain",
     "require_double_pendulum",
     "require_model",
-    "simple_pendulum",
+    "require_ensemble_fit",
 ]
 
-#: The longest chain a numeric model accepts, and why (measured on unit chains).
-MAX_LINKS = 1000
-MAX_LINKS_REASON = (
-    "longer chains are untested: the mass matrix's condition number grows like n^2 (1.6e6 at "
-    "1000 links, where the linear-time solve already loses 5e-12 against a dense one) and its "
-    "fastest normal mode like sqrt(n) (about 200 rad/s at 1000 unit links), so the steps an "
-    "integrator needs shrink with n")
-#: The range of every number of a model (masses, lengths, and the size of g, the damping and
-#: the drive), and why.
-PARAMETER_RANGE = (1e-9, 1e9)
-PARAMETER_RANGE_REASON = (
-    "the compiled kernels divide by products such as m l^2 and l1 l2 m2, which must stay far "
-    "inside the range of double precision (length = 1e-300 gives m l^2 = 0, a division by "
-    "zero); choose units in which the numbers lie in [1e-9, 1e9]")
 
-
-def _links(n) -> int:
-    """The number of links ``n``, checked before anything is built for it."""
-    n = check.integer_at_least("n", n, 1)
-    if n > MAX_LINKS:
-        shown = n if n < 10**6 else format(n, ".3g")
-        raise ValueError(f"`n` must be at most {MAX_LINKS} links, got {shown}: "
-                         f"{MAX_LINKS_REASON}")
-    return n
-
-
-def _in_range(name: str, values, positive: bool) -> np.ndarray:
-    """``values`` (a number or an array, validated finite) checked against PARAMETER_RANGE:
-    ``low <= value <= high`` if ``positive``, else ``|value| <= high``."""
-    low, high = PARAMETER_RANGE
-    array = np.asarray(values, dtype=float)
-    bad = (array < low) | (array > high) if positive else np.abs(array) > high
-    if np.any(bad):
-        first = float(array[bad].flat[0]) if array.ndim else float(array)
-        accepted = f"in [{low:g}, {high:g}]" if positive else f"of size at most {high:g}"
-        raise ValueError(f"`{name}` must be {accepted}, got {first:g}: {PARAMETER_RANGE_REASON}")
-    return array
-
-
-def _size(name: str, value, positive: bool = True) -> float:
-    """A model's number, finite and (positive and) within PARAMETER_RANGE."""
-    value = check.positive_number(name, value) if positive else check.real_number(name, value)
-    _in_range(name, value, positive)
-    return value
-
-
-@dataclass(frozen=True)
-class Drawing:
-    """What a picture of a model shows: its points, and which of them are joined.
-
-    The drawings, the animations and the live simulator read this, and the points'
-    positions from ``model.positions(theta, t)``; a chain and a system given by its points
-    are drawn by the same code.
-
-    Attributes
-    ----------
-    masses : tuple of float
-        One per point [kg]; a point of mass 0 (a moving pivot) is drawn as a small mark.
-    rods, springs : tuple of (int, int)
-        Pairs of points joined by a rod or by a spring; ``-1`` is the fixed origin.
-    movable : tuple of (str or None)
-        One per point: None where dragging the point places the coordinates
-        (:meth:`PendulumModel.place_point`), else the sentence that says why it cannot.
-    reach : float or None
-        Half the width of a square view that holds every configuration [m] (a chain's
-        length); None where only the motion tells (the view is fitted to it).
-    """
-
-    masses: tuple
-    rods: tuple
-    springs: tuple = ()
-    movable: tuple = ()
-    reach: float | None = None
-
-    @property
-    def uses_origin(self) -> bool:
-        """Whether a rod or a spring hangs from the fixed origin (drawn as the pivot)."""
-        return any(-1 in pair for pair in (*self.rods, *self.springs))
-
-
-class PendulumModel:
+class PendulumModel(ModelFunctions, ChainDrawing):
     """A planar chain of ``n`` pendulums with numeric masses, lengths, ``g`` and forces.
 
-    Build one with :func:`simple_pendulum`, :func:`driven_pendulum`,
-    :func:`double_pendulum` or :func:`n_pendulum`. Angles are absolute,
+    Build one with :func:`~pendulum_lab.simple_pendulum`, :func:`~pendulum_lab.driven_pendulum`,
+    :func:`~pendulum_lab.double_pendulum` or :func:`~pendulum_lab.n_pendulum`. Angles are absolute,
     measured from the downward vertical; ``theta``, ``omega`` (angular
     velocities) and ``p`` (canonical momenta) are arrays of shape ``(n,)`` or
     ``(..., n)``.
@@ -182,19 +111,19 @@ class PendulumModel:
 
     def __init__(self, n: int, masses, lengths, g: float, *, damping=0.0,
                  drive_amplitude: float = 0.0, drive_frequency: float | None = None):
-        self.n = _links(n)
+        self.n = link_count(n)
         self.masses = check.positive_vector("masses", masses, self.n)
         self.lengths = check.positive_vector("lengths", lengths, self.n)
         for name, values in (("masses", self.masses), ("lengths", self.lengths)):
             for i, value in enumerate(values):
-                _in_range(f"{name}[{i}]", value, positive=True)
-        self.g = _size("g", g, positive=False)
+                check_range(f"{name}[{i}]", value, positive=True)
+        self.g = model_number("g", g, positive=False)
         self.damping = check.nonnegative_vector("damping", damping, self.n)
         for i, value in enumerate(self.damping):
-            _in_range("damping" if self.n == 1 else f"damping[{i}]", value, positive=False)
-        self.drive_amplitude = _size("drive_amplitude", drive_amplitude, positive=False)
+            check_range("damping" if self.n == 1 else f"damping[{i}]", value, positive=False)
+        self.drive_amplitude = model_number("drive_amplitude", drive_amplitude, positive=False)
         self.drive_frequency = (None if drive_frequency is None
-                                else _size("drive_frequency", drive_frequency))
+                                else model_number("drive_frequency", drive_frequency))
         if self.drive_amplitude != 0 and self.drive_frequency is None:
             raise ValueError("`drive_frequency` must be given (> 0) when `drive_amplitude` != 0")
         self.forced = not (self.is_conservative and self.is_autonomous)
@@ -365,172 +294,6 @@ class PendulumModel:
         return (f"a model with {self.n} link(s)",
                 "the model is driven, so its equations depend on the time")
 
-    def _time(self, t):
-        """``t`` as floats; it may be left out only when the equations do not depend on it."""
-        if t is None:
-            if not self.is_autonomous:
-                raise ValueError(f"`t` is required: {self._described()[1]}")
-            return 0.0
-        t = np.asarray(t, dtype=float)
-        if not np.all(np.isfinite(t)):
-            raise ValueError("`t` must be finite")
-        return t
-
-    def _states(self, name: str, value) -> np.ndarray:
-        """``value`` as floats of shape ``(..., n)``, or an error naming ``name``."""
-        try:
-            array = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise TypeError(f"`{name}` must be an array of real numbers of shape (..., "
-                            f"{self.n})") from None
-        if array.ndim == 0 or array.shape[-1] != self.n:
-            raise ValueError(f"`{name}` must have shape (..., {self.n}) for "
-                             f"{self._described()[0]}, got shape {array.shape}")
-        return array
-
-    def mass_matrix_at(self, theta) -> np.ndarray:
-        """``M(theta)``, shape ``(..., n, n)``."""
-        return self._fn.mass_matrix(self._states("theta", theta), self._params)
-
-    def accelerations(self, theta, omega, t=None) -> np.ndarray:
-        """``omega' = M(theta)^-1 (F(theta, omega) + Q(omega, t))``, shape ``(..., n)``.
-
-        ``t`` (a float, or an array of the batch shape ``...``) is needed for a
-        driven model only.
-        """
-        return self._fn.accelerations(self._states("theta", theta),
-                                      self._states("omega", omega), self._params, self._time(t))
-
-    def generalized_forces(self, theta, omega, t=None) -> np.ndarray:
-        """``Q(omega, t)``: joint damping and drive torques, shape ``(..., n)``; 0 if unforced."""
-        return self._fn.generalized_forces(self._states("theta", theta),
-                                           self._states("omega", omega), self._params,
-                                           self._time(t))
-
-    def vector_field(self, theta, p, t=None) -> tuple[np.ndarray, np.ndarray]:
-        """``(dtheta/dt, dp/dt) = (dH/dp, -dH/dq + Q)`` in canonical variables, each ``(..., n)``.
-
-        The right-hand side every integrator integrates (the compiled kernels
-        compute the same). ``t`` is needed for a driven model only.
-        """
-        theta = self._states("theta", theta)
-        omega = self.velocities(theta, p)
-        return omega, (self._fn.dlagrangian_dq(theta, omega, self._params)
-                       + self._fn.generalized_forces(theta, omega, self._params, self._time(t)))
-
-    def momenta(self, theta, omega, t=None) -> np.ndarray:
-        """``p = M(theta) omega`` (``t``, accepted as by every model, does not enter)."""
-        return self._fn.momenta(self._states("theta", theta), self._states("omega", omega),
-                                self._params)
-
-    def velocities(self, theta, p, t=None) -> np.ndarray:
-        """``omega = M(theta)^-1 p`` (this is ``dH/dp``; ``t`` does not enter)."""
-        return self._fn.velocities(self._states("theta", theta), self._states("p", p),
-                                   self._params)
-
-    def kinetic_energy(self, theta, omega, t=None) -> np.ndarray:
-        """Kinetic energy (``t`` is accepted for the calling convention of every model; a chain's
-        energies do not depend on it)."""
-        return self._fn.kinetic(self._states("theta", theta), self._states("omega", omega),
-                                self._params)
-
-    def potential_energy(self, theta, t=None) -> np.ndarray:
-        """Potential energy, zero at the pivot's height."""
-        return self._fn.potential(self._states("theta", theta), self._params)
-
-    def energy(self, theta, omega, t=None) -> np.ndarray:
-        return self.kinetic_energy(theta, omega, t) + self.potential_energy(theta, t)
-
-    # Hamilton's equations in canonical variables. dH/dq at fixed p equals
-    # -dL/dq at omega = M^-1 p (a property of the Legendre transform), which
-    # avoids differentiating a symbolic inverse. H is the mechanical energy:
-    # the forces Q of a forced model are not in it (see vector_field).
-    def dH_dp(self, theta, p, t=None) -> np.ndarray:
-        return self.velocities(theta, p, t)
-
-    def dH_dq(self, theta, p) -> np.ndarray:
-        theta = self._states("theta", theta)
-        return -self._fn.dlagrangian_dq(theta, self.velocities(theta, p), self._params)
-
-    def hamiltonian_value(self, theta, p) -> np.ndarray:
-        """``H(theta, p)`` evaluated numerically."""
-        return self.energy(theta, self.velocities(theta, p))
-
-    def jacobian(self, theta, p, t=None) -> np.ndarray:
-        """Jacobian of :meth:`vector_field` with respect to ``(theta, p)``, shape ``(..., 2n, 2n)``.
-
-        With ``omega = M^-1 p``: ``d omega/dp = M^-1``,
-        ``d omega/dq = -M^-1 d(M omega)/dq``, and ``-dH/dq = dL/dq(q, omega)``
-        differentiates by the chain rule. The damping force ``-C omega`` adds
-        ``-C`` to ``d(dp/dt)/d omega``; the drive depends on ``t`` only.
-        """
-        self._time(t)  # a driven model's field depends on t (its Jacobian does not)
-        theta = self._states("theta", theta)
-        mass = self.mass_matrix_at(theta)
-        omega = solve_small(mass, self._states("p", p))
-        args = (theta, omega, self._params)
-        inv_mass = np.linalg.inv(mass)
-        dw_dq = -inv_mass @ self._fn.dmomenta_dq(*args)
-        rate_w = self._fn.lag_qw(*args)  # d(dp/dt)/d omega
-        if not self.is_conservative:
-            rate_w = rate_w - self._fn.damping_matrix(self._params)
-        top = np.concatenate([dw_dq, inv_mass], axis=-1)
-        bottom = np.concatenate([self._fn.lag_qq(*args) + rate_w @ dw_dq, rate_w @ inv_mass], -1)
-        return np.concatenate([top, bottom], axis=-2)
-
-    #: A chain swings in a plane: its positions are ``(x, y)``.
-    dimensions = 2
-
-    def positions(self, theta, t=None) -> tuple[np.ndarray, np.ndarray]:
-        """Cartesian bob positions ``(x, y)``, each shape ``(..., n)``, pivot at the origin
-        (``t`` is accepted for the protocol a :class:`~pendulum_lab.model.SystemModel`
-        shares; a chain's pivot does not move)."""
-        theta = self._states("theta", theta)
-        lengths = np.stack(np.broadcast_arrays(*self.lengths), axis=-1)
-        return (np.cumsum(lengths * np.sin(theta), axis=-1),
-                -np.cumsum(lengths * np.cos(theta), axis=-1))
-
-    @property
-    def angle_coordinates(self) -> tuple[bool, ...]:
-        """For each coordinate, whether it is an angle (every one of a chain's)."""
-        return (True,) * self.n
-
-    @property
-    def drawing(self) -> Drawing:
-        """The chain's picture: the bobs joined by rods, the first to the pivot."""
-        n = self.n
-        return Drawing(masses=tuple(float(m) for m in self.masses),
-                       rods=tuple((i - 1, i) for i in range(n)), movable=(None,) * n,
-                       reach=float(sum(self.lengths)))
-
-    def place_point(self, point: int, x: float, y: float, theta, t: float = 0.0) -> np.ndarray:
-        """The angles after bob ``point`` (0-based) is dragged to ``(x, y)`` [m].
-
-        The bob moves on its circle around the joint before it, to the point of the circle
-        in the direction of ``(x, y)`` (a rod does not stretch: a point beyond reach is
-        clamped onto the circle); the other arms keep their angles ``theta``.
-
-        Raises
-        ------
-        ValueError
-            If ``(x, y)`` is the joint itself (it gives the arm no direction).
-        """
-        theta = self._states("theta", theta)
-        point = check.index_below("point", point, self.n)
-        x, y = check.real_number("x", x), check.real_number("y", y)
-        joint_x, joint_y = 0.0, 0.0
-        if point > 0:
-            xs, ys = self.positions(theta)
-            joint_x, joint_y = float(xs[point - 1]), float(ys[point - 1])
-        dx, dy = x - joint_x, y - joint_y
-        if math.hypot(dx, dy) <= 1e-9 * sum(self.lengths):
-            raise ValueError(f"the release point ({x:.3g}, {y:.3g}) m is the joint of arm "
-                             f"{point + 1}: it gives the arm no direction")
-        angles = np.array(theta, dtype=float)
-        # theta is measured from the downward vertical: (x, y) = l (sin theta, -cos theta).
-        angles[point] = math.atan2(dx, -dy)
-        return angles
-
     def __repr__(self) -> str:
         forces = ""
         if self.forced:
@@ -538,39 +301,6 @@ class PendulumModel:
                       f"drive_frequency={self.drive_frequency}")
         return (f"PendulumModel(n={self.n}, masses={self.masses}, lengths={self.lengths}, "
                 f"g={self.g}{forces})")
-
-
-#: The parameters a family can vary (one number per member).
-FAMILY_PARAMETERS = ("damping", "drive_amplitude", "drive_frequency", "g")
-
-
-class FamilyMembers:
-    """The members of a family (:class:`ModelFamily`, :class:`~pendulum_lab.model.SystemFamily`):
-    counted, picked, selected and broadcast to a run's ensemble. A family has ``base`` (the
-    model varied), ``values`` (``{name: array}``) and ``_mapped(transform)``, the same family
-    with ``transform`` applied to every array."""
-
-    def __len__(self) -> int:
-        return int(np.prod(self.shape))
-
-    def member(self, index) -> PendulumModel:
-        """The member at ``index`` (an index into ``shape``) as a model of its own."""
-        return self.base.replace(**{k: float(a[index]) for k, a in self.values.items()})
-
-    def select(self, index):
-        """The members ``self.values[...][index]`` (NumPy indexing: a mask, a slice)."""
-        return self._mapped(lambda a: a[index])
-
-    def for_ensemble(self, batch_shape: tuple):
-        """The members broadcast to an ensemble of ``batch_shape`` and flattened.
-
-        Raises
-        ------
-        ValueError
-            If the family's shape does not broadcast to ``batch_shape``.
-        """
-        batch_shape = require_ensemble_fit(self.shape, batch_shape)
-        return self._mapped(lambda a: np.broadcast_to(a, batch_shape).reshape(-1))
 
 
 class ModelFamily(FamilyMembers, PendulumModel):
@@ -619,7 +349,7 @@ class ModelFamily(FamilyMembers, PendulumModel):
             if name == "drive_frequency" and np.any(array <= 0):
                 raise ValueError(f"`drive_frequency` must be a positive number (> 0), got "
                                  f"{array[array <= 0].flat[0]}")
-            _in_range(name, array, positive=name == "drive_frequency")
+            check_range(name, array, positive=name == "drive_frequency")
         has_frequency = value["drive_frequency"] is not None
         if not has_frequency and np.any(np.asarray(value["drive_amplitude"]) != 0):
             raise ValueError("`drive_frequency` must be given (> 0) when `drive_amplitude` != 0")
@@ -702,112 +432,6 @@ class ModelFamily(FamilyMembers, PendulumModel):
     def __repr__(self) -> str:
         return f"ModelFamily({self.base!r}, varying {list(self.values)} over shape {self.shape})"
 
-
-def broadcast_values(arrays: dict) -> tuple[tuple, dict]:
-    """The common shape of a family's arrays of values and the arrays broadcast to it; a
-    ``ValueError`` naming their shapes if they do not broadcast together."""
-    try:
-        shape = np.broadcast_shapes(*(a.shape for a in arrays.values()))
-    except ValueError:
-        shapes = {k: a.shape for k, a in arrays.items()}
-        raise ValueError(f"the arrays of values must broadcast together, got {shapes}") from None
-    return shape, {k: np.broadcast_to(a, shape) for k, a in arrays.items()}
-
-
-def require_ensemble_fit(shape: tuple, batch_shape) -> tuple:
-    """``batch_shape`` as a tuple if a family of ``shape`` broadcasts to it, else a
-    ``ValueError`` (the members of a run are its initial states' batch)."""
-    batch_shape = tuple(batch_shape)
-    try:
-        fits = np.broadcast_shapes(shape, batch_shape) == batch_shape
-    except ValueError:
-        fits = False
-    if not fits:
-        raise ValueError(
-            f"the model family has shape {shape}, which must broadcast to the ensemble shape "
-            f"of the initial state, {batch_shape} (`theta0` of shape (..., n))")
-    return batch_shape
-
-
-def simple_pendulum(mass: float = 1.0, length: float = 1.0, g: float = 9.81) -> PendulumModel:
-    """A simple pendulum: one point mass on a massless rod.
-
-    Examples
-    --------
-    >>> sp_ = simple_pendulum(length=2.0)
-    >>> float(sp_.accelerations([np.pi / 2], [0.0])[0])
-    -4.905
-    """
-    return PendulumModel(1, (_size("mass", mass),), (_size("length", length),), g)
-
-
-def driven_pendulum(damping: float = 0.5, drive_amplitude: float = 1.2,
-                    drive_frequency: float = 2 / 3, mass: float = 1.0, length: float = 1.0,
-                    g: float = 1.0) -> PendulumModel:
-    """The damped, driven simple pendulum.
-
-    ``m l^2 theta'' + damping theta' + m g l sin(theta) = drive_amplitude cos(drive_frequency t)``.
-    With ``m = l = g = 1`` (the defaults) this is the dimensionless form of
-    Baker and Gollub, with quality factor ``q = 1 / damping``; the defaults
-    (``q = 2``, amplitude 1.2, frequency 2/3) lie in its chaotic range.
-    ``damping = drive_amplitude = 0`` gives the conservative simple pendulum.
-
-    Parameters
-    ----------
-    damping : float >= 0
-        Viscous damping coefficient [N m s/rad].
-    drive_amplitude : float
-        Amplitude of the drive torque [N m].
-    drive_frequency : float > 0
-        Angular frequency of the drive [rad/s].
-    mass, length : float > 0
-    g : float
-
-    References
-    ----------
-    G. L. Baker, J. P. Gollub, *Chaotic Dynamics: An Introduction*, 2nd ed.,
-    Cambridge University Press 1996, ch. 3.
-
-    Examples
-    --------
-    >>> model = driven_pendulum()
-    >>> model.conformal_damping_rate, round(model.drive_period, 6)
-    (0.5, 9.424778)
-    >>> float(model.accelerations([0.0], [0.0], t=0.0)[0])  # the drive alone at t = 0
-    1.2
-    """
-    return PendulumModel(1, (_size("mass", mass),), (_size("length", length),), g,
-                         damping=damping, drive_amplitude=drive_amplitude,
-                         drive_frequency=drive_frequency)
-
-
-def double_pendulum(m1: float = 1.0, m2: float = 1.0, l1: float = 1.0, l2: float = 1.0,
-                    g: float = 9.81, *, damping=0.0, drive_amplitude: float = 0.0,
-                    drive_frequency: float | None = None) -> PendulumModel:
-    """A double pendulum with absolute angles ``theta_1``, ``theta_2`` from the vertical.
-
-    ``damping`` (one number for both joints, or one per joint),
-    ``drive_amplitude`` and ``drive_frequency`` add joint damping and a drive
-    torque at the pivot; see :class:`PendulumModel`.
-    """
-    masses = (_size("m1", m1), _size("m2", m2))
-    lengths = (_size("l1", l1), _size("l2", l2))
-    return PendulumModel(2, masses, lengths, g, damping=damping, drive_amplitude=drive_amplitude,
-                         drive_frequency=drive_frequency)
-
-
-def n_pendulum(n: int, masses=None, lengths=None, g: float = 9.81, *, damping=0.0,
-               drive_amplitude: float = 0.0, drive_frequency: float | None = None
-               ) -> PendulumModel:
-    """A chain of ``n`` pendulums; masses and lengths default to 1.
-
-    ``damping``, ``drive_amplitude`` and ``drive_frequency`` as for
-    :class:`PendulumModel`.
-    """
-    n = _links(n)  # before the default masses and lengths are made for it
-    return PendulumModel(n, (1.0,) * n if masses is None else masses,
-                         (1.0,) * n if lengths is None else lengths, g, damping=damping,
-                         drive_amplitude=drive_amplitude, drive_frequency=drive_frequency)
 
 
 def require_model(model, name: str = "model") -> PendulumModel:

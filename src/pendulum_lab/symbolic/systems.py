@@ -368,50 +368,8 @@ class MechanicalSystem:
         if (lagrangian is None) == (points is None):
             raise TypeError("give exactly one of `points` (with `masses`) and `lagrangian`")
         if points is not None:
-            points = [self._point(i, point) for i, point in
-                      enumerate(_sequence("points", points, "(x, y) or (x, y, z) tuples"))]
-            if points and any(len(point) != len(points[0]) for point in points):
-                odd = next(i for i, point in enumerate(points) if len(point) != len(points[0]))
-                raise ValueError(
-                    f"`points[{odd}]` has {len(points[odd])} coordinates and `points[0]` "
-                    f"{len(points[0])}: give every point as (x, y) (a planar system) or every "
-                    "point as (x, y, z) (in space), not a mixture")
-            masses = [] if masses is None else _sequence("masses", masses, "masses")
-            if len(masses) != len(points):
-                raise ValueError(f"`masses` must hold one mass per point ({len(points)})")
-            self.points = points
-            self.dimensions = len(points[0]) if points else 2
-            self.masses = [self._mass(i, m) for i, m in enumerate(masses)]
-            self.frame_rotation = self._frame_rotation(frame_rotation)
-            expected = 0.05 * 1.5 ** max(0, max(
-                len(c.free_symbols & set(self.q)) for point in points for c in point))
-            kinetic = sp.Add(*(m * _tidy(sum(v ** 2 for v in self._inertial_velocity(point)))
-                               / 2 for m, point in _progress(
-                                   list(zip(self.masses, points)),
-                                   f"kinetic energy of {name} (point by point)",
-                                   expected * len(points))))
-            if self.frame_rotation is not None:
-                # In the turning frame: T = 1/2 m |r'|^2 as seen there, and the rest of the
-                # inertial kinetic energy (velocity-linear Coriolis part, centrifugal part at
-                # rest) stays in L, the centrifugal part counted as potential energy below.
-                inertial = kinetic
-                kinetic = sp.Add(*(m * _tidy(sum(self._rate(c) ** 2 for c in point)) / 2
-                                   for m, point in zip(self.masses, points)))
-            weight = 0 if gravity is None else self._expr("gravity", gravity)
-            down = self._gravity_direction(gravity_direction, gravity)
-            potential = self._expr("potential", potential)
-            if down is None:  # straight down the last axis (y in a plane, z in space)
-                potential += sp.Add(*(m * weight * point[-1]
-                                      for m, point in zip(self.masses, points)))
-            else:
-                potential -= sp.Add(*(m * weight * sum(d * c for d, c in zip(down, point))
-                                      for m, point in zip(self.masses, points)))
-            self.potential = sp.expand(potential)
-            self.kinetic = sp.expand(kinetic)
-            self.lagrangian = self.kinetic - self.potential
-            if self.frame_rotation is not None:
-                self.lagrangian = sp.expand(inertial) - self.potential
-                self.potential = -self.lagrangian.xreplace({w: 0 for w in self.omega})
+            self._energies_of_points(points, masses, gravity, potential, gravity_direction,
+                                     frame_rotation)
         else:
             if potential != 0 or gravity is not None or masses is not None:
                 raise TypeError("`potential`, `gravity` and `masses` go with `points`; a "
@@ -419,19 +377,85 @@ class MechanicalSystem:
             if gravity_direction is not None or frame_rotation is not None:
                 raise TypeError("`gravity_direction` and `frame_rotation` go with `points`; a "
                                 "`lagrangian` contains its potential and its frame")
-            self.points, self.masses = [], []
-            self.dimensions = 2
-            self.frame_rotation = None
-            self.lagrangian = sp.expand(self._expr("lagrangian", lagrangian))
-            self._require_quadratic()
-            rest = self.lagrangian.xreplace({w: 0 for w in self.omega})
-            self.kinetic = sp.expand(self.lagrangian - rest)
-            self.potential = -rest
+            self._energies_of_lagrangian(lagrangian)
         self.joints = self._pairs("joints", joints)
         self.springs = self._pairs("springs", springs)
         if joints is None and springs is None and self.points:
             self._infer_suspension()
         self.dissipation = self._expr("dissipation", dissipation)
+        self.generalized_forces = self._forces_with_dissipation(forces)
+        self.forced = any(f != 0 for f in self.generalized_forces)
+        self._require_quadratic()
+        self.positivity_proved = self._prove_positive()
+        self.check_values(self.defaults)
+
+    def _energies_of_points(self, points, masses, gravity, potential, gravity_direction,
+                            frame_rotation) -> None:
+        """The points, masses, kinetic and potential energies and the Lagrangian of a system
+        given by its points (``T`` of the points' velocities, ``V`` of gravity and
+        ``potential``)."""
+        name = self.name
+        points = [self._point(i, point) for i, point in
+                  enumerate(_sequence("points", points, "(x, y) or (x, y, z) tuples"))]
+        if points and any(len(point) != len(points[0]) for point in points):
+            odd = next(i for i, point in enumerate(points) if len(point) != len(points[0]))
+            raise ValueError(
+                f"`points[{odd}]` has {len(points[odd])} coordinates and `points[0]` "
+                f"{len(points[0])}: give every point as (x, y) (a planar system) or every "
+                "point as (x, y, z) (in space), not a mixture")
+        masses = [] if masses is None else _sequence("masses", masses, "masses")
+        if len(masses) != len(points):
+            raise ValueError(f"`masses` must hold one mass per point ({len(points)})")
+        self.points = points
+        self.dimensions = len(points[0]) if points else 2
+        self.masses = [self._mass(i, m) for i, m in enumerate(masses)]
+        self.frame_rotation = self._frame_rotation(frame_rotation)
+        expected = 0.05 * 1.5 ** max(0, max(
+            len(c.free_symbols & set(self.q)) for point in points for c in point))
+        kinetic = sp.Add(*(m * _tidy(sum(v ** 2 for v in self._inertial_velocity(point)))
+                           / 2 for m, point in _progress(
+                               list(zip(self.masses, points)),
+                               f"kinetic energy of {name} (point by point)",
+                               expected * len(points))))
+        if self.frame_rotation is not None:
+            # In the turning frame: T = 1/2 m |r'|^2 as seen there, and the rest of the
+            # inertial kinetic energy (velocity-linear Coriolis part, centrifugal part at
+            # rest) stays in L, the centrifugal part counted as potential energy below.
+            inertial = kinetic
+            kinetic = sp.Add(*(m * _tidy(sum(self._rate(c) ** 2 for c in point)) / 2
+                               for m, point in zip(self.masses, points)))
+        weight = 0 if gravity is None else self._expr("gravity", gravity)
+        down = self._gravity_direction(gravity_direction, gravity)
+        potential = self._expr("potential", potential)
+        if down is None:  # straight down the last axis (y in a plane, z in space)
+            potential += sp.Add(*(m * weight * point[-1]
+                                  for m, point in zip(self.masses, points)))
+        else:
+            potential -= sp.Add(*(m * weight * sum(d * c for d, c in zip(down, point))
+                                  for m, point in zip(self.masses, points)))
+        self.potential = sp.expand(potential)
+        self.kinetic = sp.expand(kinetic)
+        self.lagrangian = self.kinetic - self.potential
+        if self.frame_rotation is not None:
+            self.lagrangian = sp.expand(inertial) - self.potential
+            self.potential = -self.lagrangian.xreplace({w: 0 for w in self.omega})
+
+    def _energies_of_lagrangian(self, lagrangian) -> None:
+        """The kinetic and potential energies of a system given by its Lagrangian (``T`` its
+        part quadratic in the velocities, ``V`` minus its part at rest)."""
+        self.points, self.masses = [], []
+        self.dimensions = 2
+        self.frame_rotation = None
+        self.lagrangian = sp.expand(self._expr("lagrangian", lagrangian))
+        self._require_quadratic()
+        rest = self.lagrangian.xreplace({w: 0 for w in self.omega})
+        self.kinetic = sp.expand(self.lagrangian - rest)
+        self.potential = -rest
+
+    def _forces_with_dissipation(self, forces) -> sp.Matrix:
+        """The generalized forces: ``forces`` (one expression per coordinate, or none) minus
+        the derivatives of the dissipation function by the velocities."""
+        n = self.n
         if forces is None:
             extra = sp.zeros(n, 1)
         else:
@@ -440,12 +464,8 @@ class MechanicalSystem:
                 raise ValueError(f"`forces` must hold {n} expressions (one per coordinate), "
                                  f"got {len(forces)}")
             extra = sp.Matrix([self._expr(f"forces[{i}]", f) for i, f in enumerate(forces)])
-        self.generalized_forces = (extra - sp.Matrix([self.dissipation.diff(w)
-                                                      for w in self.omega])).applyfunc(sp.expand)
-        self.forced = any(f != 0 for f in self.generalized_forces)
-        self._require_quadratic()
-        self.positivity_proved = self._prove_positive()
-        self.check_values(self.defaults)
+        return (extra - sp.Matrix([self.dissipation.diff(w)
+                                   for w in self.omega])).applyfunc(sp.expand)
 
     # ---- input -------------------------------------------------------------------
     def _require_distinct_names(self) -> None:

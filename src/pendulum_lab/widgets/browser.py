@@ -30,9 +30,15 @@ import numpy as np
 from ..codegen.browser import BrowserModule, browser_module
 from ..driver.simulate import hamiltonian_field
 from ..integrators.registry import MAIN_METHODS, get_method, unsuitability
-from ..model import require_model, simple_pendulum
-from ..model.pendulum import PendulumModel, double_pendulum, driven_pendulum, n_pendulum
-from ..model.system import elastic_pendulum
+from ..model import (
+    PendulumModel,
+    double_pendulum,
+    driven_pendulum,
+    elastic_pendulum,
+    n_pendulum,
+    require_model,
+    simple_pendulum,
+)
 from .channel import BROWSER_SETTINGS, STATIC, figure_message
 from .controls import SPEEDS, energy_changers, energy_is_conserved, forces_text
 
