@@ -172,3 +172,16 @@ def test_explore_energy_refuses_a_system_consistently_with_the_other_messages(el
     with pytest.raises(TypeError, match="explore, explore_equilibrium, the simulators and "
                                         "the drawings accept it.*explore_energy among them"):
         _ = elastic.lengths
+
+
+def test_a_start_beyond_the_rods_reach_is_refused_naming_theta0():
+    # The spherical pendulum's (x, y) beyond its 1 m rod have no height: refused before the
+    # run, not started from NaN energies (it failed at its first step with "use a smaller dt").
+    model = pl.spherical_pendulum()
+    with pytest.raises(ValueError, match=r"`theta0` = \[2\.0, 0\.0\] is not a place"):
+        pl.simulate(model, [2.0, 0.0], [0.0, 0.0], t_end=0.1, dt=0.01)
+    with pytest.raises(ValueError, match=r"ensemble member \(1,\)"):
+        pl.simulate(model, [[0.1, 0.0], [0.2, 1.5]], [[0.0, 0.0], [0.0, 0.0]], t_end=0.1,
+                    dt=0.01)
+    # negative control: inside the reach the same call runs
+    assert pl.simulate(model, [0.5, 0.0], [0.0, 0.3], t_end=0.1, dt=0.01).completed

@@ -227,7 +227,30 @@ def run_arguments(model, theta0, omega0, p0, t_end, dt, method, save_every, t0,
         )
     t0 = check.real_number("t0", t0)
     check_clock(model, t0, grid[0], grid[1], stacklevel=4)
+    check_start_defined(model, theta0, t0)
     return method, theta0, start, grid, save_every, t0
+
+
+def check_start_defined(model: PendulumModel, theta0: np.ndarray, t0: float) -> None:
+    """Refuse a start where the model's coordinates describe no place.
+
+    A spherical pendulum's ``(x, y)`` beyond its rod has no height (the square root of a
+    negative number), so its energies there are NaN; a run from there fails at its first step
+    with a message about the step size. A chain's angles are defined everywhere.
+    """
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        potential = np.asarray(model.potential_energy(theta0, t=t0), dtype=float)
+    undefined = ~np.isfinite(potential)
+    if not np.any(undefined):
+        return
+    first = int(np.argmax(undefined.ravel()))
+    index = tuple(int(i) for i in np.unravel_index(first, potential.shape))
+    member = f" (ensemble member {index})" if potential.ndim else ""
+    name = getattr(model, "name", None) or "the model"
+    values = [round(float(v), 6) for v in np.reshape(theta0, (-1, model.n))[first]]
+    raise ValueError(f"`theta0` = {values}{member} is not a place {name} can be: its "
+                     f"potential energy there is not a finite number (for a point on a rod, "
+                     f"beyond the rod's reach); start nearer its rest position")
 
 
 def canonical_state(model: PendulumModel, theta0, omega0=None, p0=None, *, t0: float = 0.0):
