@@ -11,7 +11,9 @@ ends; the run fails if any job fails.
 * ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
   ``tests/site``);
 * ``core``: everything else in the main environment: doctests, unit, property and symbolic
-  tests, and the graded assignments;
+  tests, and the graded assignments, spread over the queue's workers (pytest-xdist; the
+  assignments' tests in one process, which builds them once): its gradings wait on time
+  limits, and its other tests fill those waits;
 * ``environments``: the tests that build environments of their own and start servers in them
   (``tests/binder``: Binder's environment, where the notebooks' nbval run happens;
   ``tests/install``: a student's, from a fresh clone, the sdist and the wheel; ``tests/hub``: a
@@ -60,10 +62,11 @@ def floors_job(python: str, extra: list[str], processes: int = 1) -> tuple[list[
     env = {**os.environ, "PENDULUM_LAB_CACHE": str(caches / "kernels"),
            "NUMBA_CACHE_DIR": str(caches / "numba")}
     # The benchmark items' smoke runs check the benchmark harness, which the main environment
-    # tests; at the floors they would repeat the library's runs that the unit tests make.
+    # tests; at the floors they would repeat the library's runs that the unit tests make. So
+    # would the tests marked `plumbing` (the command line's warm-up, the report).
     spread = ["-n", str(processes)] if processes > 1 else []
     command = [python, "-m", "pytest", "-o", "cache_dir=.pytest_cache/floors", *UNIT_SUITE,
-               "--ignore=tests/benchmarks", *spread, *extra]
+               "--ignore=tests/benchmarks", "-m", "not plumbing", *spread, *extra]
     return command, env
 
 
@@ -75,13 +78,16 @@ def run_serial(extra: list[str], floors: str | None) -> int:
     return code
 
 
-def pytest_job(name: str, paths: list[str], extra: list[str]) -> tuple[list[str], None]:
+def pytest_job(name: str, paths: list[str], extra: list[str],
+               processes: int = 1) -> tuple[list[str], None]:
+    # Spread over processes: the tests of one xdist group (the graded assignments) stay in one.
+    spread = ["-n", str(processes), "--dist", "loadgroup"] if processes > 1 else []
     return ([sys.executable, "-m", "pytest", "-o", f"cache_dir=.pytest_cache/{name}", *paths,
-             *extra], None)
+             *spread, *extra], None)
 
 
 def run_queue(extra: list[str], floors: str | None, workers: int = 2) -> int:
-    jobs = {"core": pytest_job("core", CORE, extra)}
+    jobs = {"core": pytest_job("core", CORE, extra, processes=workers)}
     jobs.update({name: pytest_job(name, folders, extra) for name, folders in FOLDERS.items()})
     if floors is not None:
         jobs["floors"] = floors_job(floors, extra, processes=workers)

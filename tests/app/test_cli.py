@@ -211,6 +211,7 @@ def test_python_dash_m_runs_the_same_parser():
     assert "--no-browser" in done.stdout and "--dir" in done.stdout
 
 
+@pytest.mark.plumbing
 def test_warmup_compiles_the_requested_kernels(capsys):
     from pendulum_lab import cli
 
@@ -227,6 +228,7 @@ def test_running_as_root_adds_allow_root_once(course):
     assert twice.count("--allow-root") == 1
 
 
+@pytest.mark.plumbing
 def test_warm_up_reaches_the_variational_kernels_and_the_standard_map():
     script = (
         "import pendulum_lab as pl, sys\n"

@@ -10,6 +10,8 @@ import pytest
 import pendulum_lab as pl
 from pendulum_lab import analysis, plotting, report, source, tables
 
+pytestmark = pytest.mark.plumbing  # the report's wiring: not again at the floors
+
 T_END, DT = 2.0, 0.01
 METHODS = tuple(pl.METHODS)
 # from the declarations: the methods symplectic in the variables the report runs them in

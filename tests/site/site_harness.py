@@ -34,7 +34,7 @@ import build_site  # noqa: E402  (tools/ is not a package)
 from lab_harness import CHROMIUM_ARGS, chromium_path, in_ci, serve  # noqa: E402, F401 (in_ci: conftest)
 
 VIEWPORT = {"width": 1300, "height": 900}
-MAX_SCREENSHOT_HEIGHT = 16000
+MAX_SCREENSHOT_HEIGHT = 8000
 #: Screenshots after the first mode show the page's top only: enough to see the theme applied
 #: (every page's colours are checked from the DOM in each mode); a whole tall page costs about
 #: a second of Chromium's time per page.
@@ -285,7 +285,7 @@ def crawl(
     The pages of ``first_mode_only`` are opened in the first mode only, without a screenshot.
 
     Requests to any host other than the local server are recorded and blocked. Animations are
-    played in the first mode only. Screenshots (whole page, at most 16000 px tall, in the
+    played in the first mode only. Screenshots (whole page, at most 8000 px tall, in the
     later modes the top two screens) go to
     ``screenshots/MODE/PAGE.png`` when a folder is given. The modes run side by side, each in
     a thread with its own Playwright and Chromium (Playwright's rule: one instance per thread);

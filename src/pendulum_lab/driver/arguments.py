@@ -18,6 +18,7 @@ import numpy as np
 from .. import validation as check
 from ..integrators import Method, get_method
 from ..model import PendulumModel, require_model
+from ..model.family import FamilyMembers
 
 __all__ = [
     "canonical_state",
@@ -238,16 +239,20 @@ def check_start_defined(model: PendulumModel, theta0: np.ndarray, t0: float) -> 
     negative number), so its energies there are NaN; a run from there fails at its first step
     with a message about the step size. A chain's angles are defined everywhere.
     """
+    batch = theta0.shape[:-1]
+    states = theta0.reshape(-1, model.n)
+    if isinstance(model, FamilyMembers):  # one member per state (refused if it does not fit)
+        model = model.for_ensemble(batch)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        potential = np.asarray(model.potential_energy(theta0, t=t0), dtype=float)
+        potential = np.asarray(model.potential_energy(states, t=t0), dtype=float).reshape(-1)
     undefined = ~np.isfinite(potential)
     if not np.any(undefined):
         return
-    first = int(np.argmax(undefined.ravel()))
-    index = tuple(int(i) for i in np.unravel_index(first, potential.shape))
-    member = f" (ensemble member {index})" if potential.ndim else ""
+    first = int(np.argmax(undefined))
+    index = tuple(int(i) for i in np.unravel_index(first, batch))
+    member = f" (ensemble member {index})" if batch else ""
     name = getattr(model, "name", None) or "the model"
-    values = [round(float(v), 6) for v in np.reshape(theta0, (-1, model.n))[first]]
+    values = [round(float(v), 6) for v in states[first]]
     raise ValueError(f"`theta0` = {values}{member} is not a place {name} can be: its "
                      f"potential energy there is not a finite number (for a point on a rod, "
                      f"beyond the rod's reach); start nearer its rest position")

@@ -80,6 +80,17 @@ class SceneView:
     reach: float
 
 
+def _check_runs(runs, model) -> None:
+    """Refuse runs that are not single trajectories of ``model``."""
+    for run in runs:
+        if run.theta.ndim != 2 or run.theta.shape[1] != model.n:
+            raise ValueError(
+                f"`traj` must be one trajectory of this {model.n}-link model, got "
+                f"angles of shape {run.theta.shape}"
+            )
+        require_same_system(run, model)
+
+
 def _run_title(traj: Trajectory) -> str:
     return f"{traj.method.name}, dt = {traj.dt:g} s"
 
@@ -259,13 +270,7 @@ class PendulumScene:
         font_size: float | None = None,
     ):
         runs, self.labels = scene_runs(traj, labels)
-        for run in runs:
-            if run.theta.ndim != 2 or run.theta.shape[1] != model.n:
-                raise ValueError(
-                    f"`traj` must be one trajectory of this {model.n}-link model, got "
-                    f"angles of shape {run.theta.shape}"
-                )
-            require_same_system(run, model)
+        _check_runs(runs, model)
         trail = check.non_negative_number("trail", trail)
         self.model, self.runs, self.traj = model, runs, runs[0]
         positions = [model.positions(run.theta, run.t) for run in runs]
@@ -288,19 +293,49 @@ class PendulumScene:
         )
         cells = [grid[0]] if len(views) == 1 else list(grid[0].subgridspec(1, len(views),
                                                                            wspace=0.35))
-        every = [np.concatenate([np.ravel(c) for run in positions for c in run])]
+        self.views = self._draw_views(figure, cells, views, positions, size)
+        first = self.views[0]
         titles = {_run_title(run) for run in runs}
+        first.ax.set_title(titles.pop() if len(titles) == 1 else "", fontsize=size)
+        self.chains, self.parts, self._reach = first.chains, first.parts, first.reach
+        self.rods, self.bobs, self.trail_line = self.chains[0]
+        energy = self._draw_energy_panel(figure.add_subplot(grid[1]), size)
+        # Blitting draws in this order: each run's trail, rods, bobs; a later run over an earlier.
+        self.artists = [
+            artist
+            for view in self.views
+            for (rods, bobs, trail), (springs, pivots) in zip(view.chains, view.parts)
+            for artist in (trail, rods, springs, bobs, pivots)
+        ]
+        self.artists += list(self.energy_lines.values())
+        self.readout = None
+        if readout:
+            self.readout = figure.text(
+                0.5, 0.985, " ", ha="center", va="top", family="monospace", fontsize=size
+            )
+            self.artists.append(self.readout)
+        for ax in (*(view.ax for view in self.views), energy):
+            ax.tick_params(labelsize=0.9 * size)
+            ax.xaxis.label.set_fontsize(size)
+            ax.yaxis.label.set_fontsize(size)
+        for artist in self.artists:
+            artist.set_animated(animated)
+        self.show(0)
+
+    def _draw_views(self, figure: Figure, cells, views, positions, size: float) -> list:
+        """One drawing per view (a plane: one; space: from above and from the side), each with
+        every run's chain, parts and trail, drawn from the view's two axes."""
+        masses = np.asarray(self.drawing.masses)
         bob_size = 10 * math.sqrt(masses[self._heavy].min() / masses.max())
-        if len(runs) == 1:
+        if len(self.runs) == 1:
             colours = [(TRAIL_COLOUR, "0.25", BOB_COLOUR)]
         else:
-            colours = [(colour, colour, colour) for colour in RUN_COLOURS[: len(runs)]]
-        # One drawing per view (a plane: one; space: from above and from the side), each
-        # with every run's chain, parts and trail, drawn from the view's two axes.
-        self.views = []
+            colours = [(colour, colour, colour) for colour in RUN_COLOURS[: len(self.runs)]]
+        every = [np.concatenate([np.ravel(c) for run in positions for c in run])]
+        drawn = []
         for cell, (axes, labels, name) in zip(cells, views):
             chain = figure.add_subplot(cell)
-            reach = drawing_frame(chain, model, every, every, margin=1.08, labels=labels)
+            reach = drawing_frame(chain, self.model, every, every, margin=1.08, labels=labels)
             if name:
                 chain.text(0.03, 0.97, name, transform=chain.transAxes, ha="left", va="top",
                            fontsize=0.85 * size, color="0.35")
@@ -317,13 +352,14 @@ class PendulumScene:
                 pivots = chain.plot([], [], "s", color="black", ms=5, zorder=2.6 + k)[0]
                 parts.append((springs, pivots))
             projected = [(run[axes[0]], run[axes[1]]) for run in positions]
-            self.views.append(SceneView(chain, axes, chains, parts, projected, reach))
-        first = self.views[0]
-        first.ax.set_title(titles.pop() if len(titles) == 1 else "", fontsize=size)
-        self.chains, self.parts, self._reach = first.chains, first.parts, first.reach
-        self.rods, self.bobs, self.trail_line = self.chains[0]
+            drawn.append(SceneView(chain, axes, chains, parts, projected, reach))
+        return drawn
 
-        energy = figure.add_subplot(grid[1])
+    def _draw_energy_panel(self, energy, size: float):
+        """The energies against the time on ``energy`` (axes): one run's kinetic, potential and
+        total; several runs' total (thick) and kinetic (thin) each in its colour. Sets
+        ``energy_lines``; returns the axes."""
+        runs = self.runs
         if len(runs) == 1:
             self._energies = {
                 "kinetic": self.traj.kinetic,
@@ -356,10 +392,6 @@ class PendulumScene:
             xlabel="t (s)",
             ylabel="energy (J)",
         )
-        for ax in (*(view.ax for view in self.views), energy):
-            ax.tick_params(labelsize=0.9 * size)
-            ax.xaxis.label.set_fontsize(size)
-            ax.yaxis.label.set_fontsize(size)
         self.energy_lines = {key: energy.plot([], [], **styles[key])[0] for key in self._energies}
         energy.legend(
             loc="lower left",
@@ -372,23 +404,7 @@ class PendulumScene:
             handletextpad=0.4,
             columnspacing=0.9,
         )
-        # Blitting draws in this order: each run's trail, rods, bobs; a later run over an earlier.
-        self.artists = [
-            artist
-            for view in self.views
-            for (rods, bobs, trail), (springs, pivots) in zip(view.chains, view.parts)
-            for artist in (trail, rods, springs, bobs, pivots)
-        ]
-        self.artists += list(self.energy_lines.values())
-        self.readout = None
-        if readout:
-            self.readout = figure.text(
-                0.5, 0.985, " ", ha="center", va="top", family="monospace", fontsize=size
-            )
-            self.artists.append(self.readout)
-        for artist in self.artists:
-            artist.set_animated(animated)
-        self.show(0)
+        return energy
 
     def show(self, index: int) -> list:
         """Draw state ``index`` of the trajectory (of every run); return the changed artists."""
