@@ -3,10 +3,11 @@
 The suite's time goes mostly to running notebooks and building environments: the browser tests
 run every notebook in JupyterLab, the website build runs them again, the Binder environment runs
 them under nbval, the install tests build a student's environment, the floors run the unit suite
-under the oldest supported versions. Each job is one process mostly waiting on a kernel or an
-installer, so on a machine with two cores the jobs run two at a time, the longest first, and
-each core that a job leaves takes the next job of the queue. Each job's output is printed when it
-ends; the run fails if any job fails.
+under the oldest supported versions. Much of a job's time is spent waiting on a kernel, a
+browser or an installer, so on a machine with two cores the jobs run two at a time, in the order
+below, and each core that a job leaves takes the next job of the queue; the core and floors jobs
+spread their own tests over two processes. Each job's output is printed when it ends; the run
+fails if any job fails.
 
 * ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
   ``tests/site``);
