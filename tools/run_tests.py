@@ -5,16 +5,14 @@ run every notebook in JupyterLab, the website build runs them again, the Binder 
 them under nbval, the install tests build a student's environment, the floors run the unit suite
 under the oldest supported versions. Much of a job's time is spent waiting on a kernel, a
 browser or an installer, so on a machine with two cores the jobs run two at a time, in the order
-below, and each core that a job leaves takes the next job of the queue; the core and floors jobs
-spread their own tests over two processes. Each job's output is printed when it ends; the run
+below, and each core that a job leaves takes the next job of the queue; the floors job, last,
+spreads its tests over two processes. Each job's output is printed when it ends; the run
 fails if any job fails.
 
 * ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
   ``tests/site``);
 * ``core``: everything else in the main environment: doctests, unit, property and symbolic
-  tests, and the graded assignments, spread over the queue's workers (pytest-xdist; the
-  assignments' tests in one process, which builds them once): its gradings wait on time
-  limits, and its other tests fill those waits;
+  tests, and the graded assignments;
 * ``environments``: the tests that build environments of their own and start servers in them
   (``tests/binder``: Binder's environment, where the notebooks' nbval run happens;
   ``tests/install``: a student's, from a fresh clone, the sdist and the wheel; ``tests/hub``: a
@@ -79,16 +77,15 @@ def run_serial(extra: list[str], floors: str | None) -> int:
     return code
 
 
-def pytest_job(name: str, paths: list[str], extra: list[str],
-               processes: int = 1) -> tuple[list[str], None]:
-    # Spread over processes: the tests of one xdist group (the graded assignments) stay in one.
-    spread = ["-n", str(processes), "--dist", "loadgroup"] if processes > 1 else []
+def pytest_job(name: str, paths: list[str], extra: list[str]) -> tuple[list[str], None]:
+    # One process: the core job's module-scoped fixtures (the graded attack arena, the report)
+    # would be built again by each pytest-xdist process that gets one of their tests.
     return ([sys.executable, "-m", "pytest", "-o", f"cache_dir=.pytest_cache/{name}", *paths,
-             *spread, *extra], None)
+             *extra], None)
 
 
 def run_queue(extra: list[str], floors: str | None, workers: int = 2) -> int:
-    jobs = {"core": pytest_job("core", CORE, extra, processes=workers)}
+    jobs = {"core": pytest_job("core", CORE, extra)}
     jobs.update({name: pytest_job(name, folders, extra) for name, folders in FOLDERS.items()})
     if floors is not None:
         jobs["floors"] = floors_job(floors, extra, processes=workers)
