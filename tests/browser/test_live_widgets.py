@@ -378,6 +378,16 @@ def test_a_system_with_five_parameters_keeps_its_controls_inside_the_cell(page):
         page.set_viewport_size(VIEWPORT)
 
 
+def drag_between(page, start, to) -> None:
+    """Drag the mouse from page pixel ``start`` to ``to`` in five moves, as a hand would."""
+    page.mouse.move(*start)
+    page.mouse.down()
+    for k in range(1, 6):
+        f = k / 5
+        page.mouse.move(start[0] + f * (to[0] - start[0]), start[1] + f * (to[1] - start[1]))
+    page.mouse.up()
+
+
 def drag_bob(page, bob: int, to: tuple[float, float]) -> float:
     """Drag bob ``bob`` (0-based) of the paused simulator to canvas pixel ``to``; return the
     angle from the arm's joint to the release point the widget reported (``data-release``, in
@@ -391,14 +401,7 @@ def drag_bob(page, bob: int, to: tuple[float, float]) -> float:
         joint = [joint[0] + math.sin(theta[j]), joint[1] - math.cos(theta[j])]
     bob_at = (joint[0] + math.sin(theta[bob]), joint[1] - math.cos(theta[bob]))
     start = (PIVOT[0] + scale * bob_at[0], PIVOT[1] - scale * bob_at[1])
-    page.mouse.move(x0 + start[0], y0 + start[1])
-    page.mouse.down()
-    for k in range(1, 6):
-        f = k / 5
-        page.mouse.move(
-            x0 + start[0] + f * (to[0] - start[0]), y0 + start[1] + f * (to[1] - start[1])
-        )
-    page.mouse.up()
+    drag_between(page, (x0 + start[0], y0 + start[1]), (x0 + to[0], y0 + to[1]))
     wait_data(page, SIM, "release", "true")
     x, y = (float(v) for v in data(page, SIM)["release"].split(","))
     pointer = (PIVOT[0] + scale * x, PIVOT[1] - scale * y)
@@ -489,13 +492,7 @@ def test_dragging_a_systems_point_places_its_coordinates_there(page):
     state = paused_at_start(page, ELASTIC)
     run_before = int(state["run"])
     start = point_pixel(page, ELASTIC, state, 0)
-    to = (start[0] + 45.0, start[1] + 30.0)
-    page.mouse.move(*start)
-    page.mouse.down()
-    for k in range(1, 6):
-        f = k / 5
-        page.mouse.move(start[0] + f * (to[0] - start[0]), start[1] + f * (to[1] - start[1]))
-    page.mouse.up()
+    drag_between(page, start, (start[0] + 45.0, start[1] + 30.0))
     wait_data(page, SIM, "run", f"Number(v) === {run_before + 1}", ELASTIC)
     x, y = (float(v) for v in data(page, SIM, ELASTIC)["release"].split(","))
     # The kernel's new start puts the bob where it was released, at rest.
@@ -526,15 +523,6 @@ def test_dragging_a_shaken_pivot_is_refused_with_a_sentence(page):
 
 
 SPHERICAL = 3  # the live simulator of the spherical pendulum, a system in space
-
-
-def drag_between(page, start, to) -> None:
-    page.mouse.move(*start)
-    page.mouse.down()
-    for k in range(1, 6):
-        f = k / 5
-        page.mouse.move(start[0] + f * (to[0] - start[0]), start[1] + f * (to[1] - start[1]))
-    page.mouse.up()
 
 
 def test_a_drag_from_above_sets_the_kernels_start_of_a_system_in_space(page):
