@@ -183,5 +183,8 @@ def test_a_start_beyond_the_rods_reach_is_refused_naming_theta0():
     with pytest.raises(ValueError, match=r"ensemble member \(1,\)"):
         pl.simulate(model, [[0.1, 0.0], [0.2, 1.5]], [[0.0, 0.0], [0.0, 0.0]], t_end=0.1,
                     dt=0.01)
+    # the tools that take a start check it the same way (they share the driver's validation)
+    with pytest.raises(ValueError, match=r"`theta0` = \[2\.0, 0\.0\] is not a place"):
+        pl.step(model, [2.0, 0.0], [0.0, 0.0], dt=0.01)
     # negative control: inside the reach the same call runs
     assert pl.simulate(model, [0.5, 0.0], [0.0, 0.3], t_end=0.1, dt=0.01).completed

@@ -272,6 +272,7 @@ def canonical_state(model: PendulumModel, theta0, omega0=None, p0=None, *, t0: f
     require_model(model)
     t0 = check.real_number("t0", t0)
     theta0, start = initial_state(model, theta0, omega0, p0)
+    check_start_defined(model, theta0, t0)
     return theta0, (start if p0 is not None else model.momenta(theta0, start, t=t0))
 
 
@@ -290,6 +291,7 @@ def velocity_state(model: PendulumModel, theta0, omega0=None, p0=None, *,
     require_model(model)
     t0 = check.real_number("t0", t0)
     theta0, start = initial_state(model, theta0, omega0, p0)
+    check_start_defined(model, theta0, t0)
     if single and theta0.ndim != 1:
         raise ValueError("`theta0` and `omega0` must have shape (n,) (one trajectory)")
     return theta0, (start if p0 is None else model.velocities(theta0, start, t=t0))

@@ -38,6 +38,7 @@ from .arguments import (
     check_memory,
     check_progress,
     check_run_length,
+    check_start_defined,
     initial_state,
     memory_needed,
     progress_bar,
@@ -183,6 +184,7 @@ def step(model: PendulumModel, theta0, omega0=None, *, dt: float, method="glrk4"
         raise ValueError("`dt` must be non-zero (a negative dt steps backwards in time)")
     t0 = check.real_number("t0", t0)
     check_clock(model, t0, dt, dt)
+    check_start_defined(model, theta0, t0)
     shape = theta0.shape
     members = theta0.size // model.n
     check_memory(memory_needed(model.n, method, members, 1), "one step of "
