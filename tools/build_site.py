@@ -25,6 +25,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import nbformat
+from jupyter_cache import get_cache
+from jupyter_cache.base import CacheBundleIn
 from jupyter_cache.cache.db import create_db
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -58,6 +61,76 @@ def missing_mathjax() -> str | None:
 
 #: nbclient's message for a kernel that did not answer its start-up call in time.
 KERNEL_START_FAILURE = "Kernel didn't respond in"
+
+
+def execution_cache(output: Path = OUTPUT) -> Path:
+    """MyST-NB's execution cache of the build into ``output`` (``output/../.jupyter_cache``),
+    created with its database if it is missing.
+
+    With an empty cache both parallel readers of a build would create it; jupyter_cache checks,
+    then creates, and the second reader failed with FileExistsError (seen in CI).
+    """
+    folder = output.parent / ".jupyter_cache"
+    folder.mkdir(parents=True, exist_ok=True)
+    create_db(folder).dispose()
+    return folder
+
+
+def seed_execution_cache(executed: dict[Path, tuple[dict, float]],
+                         output: Path = OUTPUT) -> list[str]:
+    """Store notebooks executed elsewhere under the current package in the execution cache
+    of the build into ``output``, so that the build shows their outputs instead of running
+    them again (the tests' JupyterLab run of the course feeds the tests' build this way).
+
+    Parameters
+    ----------
+    executed : dict of Path -> (dict, float)
+        Per notebook as the build reads it (``docs/notebooks/NAME.ipynb``): the executed
+        notebook (nbformat JSON) and its run time in seconds.
+    output : Path
+        The build's HTML folder, as given to :func:`build`.
+
+    Returns
+    -------
+    list of str
+        The names of the notebooks stored. An execution is stored only when its code cells
+        are the source's, in order, every one of them ran, and nothing went to standard error
+        (a warning the build, which runs with warnings off, would not show). What is stored
+        is the source notebook (its cells, metadata and kernel) with the execution's outputs,
+        counts, language and widget state, so that the cache finds it under the key the build
+        computes.
+    """
+    sys.path.insert(0, str(DOCS / "_ext"))
+    try:
+        import course_site
+    finally:
+        sys.path.remove(str(DOCS / "_ext"))
+    folder = execution_cache(output)
+    # The executions ran under the package as it is now: a cache of an older package goes.
+    course_site.empty_cache_if_package_changed(output.parent, folder)
+    cache = get_cache(folder)
+    stored = []
+    for path, (notebook, seconds) in sorted(executed.items()):
+        source = nbformat.read(path, as_version=4)
+        ran = nbformat.from_dict(notebook)
+        mine = [cell for cell in source.cells if cell.cell_type == "code"]
+        theirs = [cell for cell in ran.cells if cell.cell_type == "code"]
+        if ([cell.source for cell in mine] != [cell.source for cell in theirs]
+                or any(cell.execution_count is None for cell in theirs if cell.source.strip())
+                or any(out.get("name") == "stderr" for cell in theirs for out in cell.outputs)):
+            continue
+        for cell, result in zip(mine, theirs, strict=True):
+            cell.outputs, cell.execution_count = result.outputs, result.execution_count
+        # What an execution records beside the outputs: the kernel's language (the pages'
+        # code highlighting) and the widgets' state (which views are progress bars).
+        for key in ("language_info", "widgets"):
+            if key in ran.metadata:
+                source.metadata[key] = ran.metadata[key]
+        cache.cache_notebook_bundle(
+            CacheBundleIn(source, str(path), data={"execution_seconds": seconds}),
+            check_validity=False, overwrite=True)
+        stored.append(path.stem)
+    return stored
 
 
 def build(
@@ -95,12 +168,7 @@ def build(
     reason = missing_mathjax()
     if reason:
         raise FileNotFoundError(reason)
-    # With an empty cache both parallel readers would create MyST-NB's execution cache
-    # (output/../.jupyter_cache); jupyter_cache checks, then creates, and the second
-    # reader fails with FileExistsError (seen in CI). Create it, and its database, first.
-    execution_cache = output.parent / ".jupyter_cache"
-    execution_cache.mkdir(parents=True, exist_ok=True)
-    create_db(execution_cache).dispose()
+    execution_cache(output)
     command = [
         sys.executable, "-m", "sphinx",
         "-b", "html", "-E", "-q", "-j", str(jobs),

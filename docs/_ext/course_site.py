@@ -354,19 +354,26 @@ def package_fingerprint() -> str:
     return digest.hexdigest()
 
 
-def check_package(app) -> None:
-    """Empty the execution cache when the package's source changed since it was filled."""
-    build_dir = Path(app.outdir).parent
-    cache = Path(app.config.nb_execution_cache_path or build_dir / ".jupyter_cache")
+def empty_cache_if_package_changed(build_dir: Path, cache: Path) -> bool:
+    """Empty the execution cache ``cache`` when the package's source changed since the
+    fingerprint kept in ``build_dir`` was written, and keep the current one there. Returns
+    whether the fingerprint changed (True on a first build too)."""
     stamp = build_dir / FINGERPRINT_FILE
     current = package_fingerprint()
     previous = stamp.read_text(encoding="utf-8") if stamp.exists() else None
-    app.env.course_package_changed = previous != current
     if previous is not None and previous != current:
         logger.info("pendulum_lab changed since the last build: every notebook runs again")
         shutil.rmtree(cache, ignore_errors=True)
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.write_text(current, encoding="utf-8")
+    return previous != current
+
+
+def check_package(app) -> None:
+    """Empty the execution cache when the package's source changed since it was filled."""
+    build_dir = Path(app.outdir).parent
+    cache = Path(app.config.nb_execution_cache_path or build_dir / ".jupyter_cache")
+    app.env.course_package_changed = empty_cache_if_package_changed(build_dir, cache)
     app.course_build_started = time.time()
 
 

@@ -38,11 +38,13 @@ def pytest_collection_modifyitems(config, items):
 
 
 @pytest.fixture(scope="session")
-def notebook_runner(tmp_path_factory):
+def notebook_runner(tmp_path_factory, notebooks_run_in_jupyterlab):
     """One JupyterLab (on a temporary copy of the notebooks) and one Chromium for the session,
-    started by the first test that opens a notebook; one page per notebook. See
+    started by the first test that opens a notebook; one page per notebook. Each clean run-all
+    is kept in ``notebooks_run_in_jupyterlab`` (for the website's build). See
     ``lab_harness.NotebookRunner``."""
-    runner = NotebookRunner(lambda: tmp_path_factory.mktemp("jupyterlab"))
+    runner = NotebookRunner(lambda: tmp_path_factory.mktemp("jupyterlab"),
+                            notebooks_run_in_jupyterlab)
     _RUNNERS.append(runner)
     try:
         yield runner

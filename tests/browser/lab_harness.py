@@ -64,8 +64,10 @@ MAX_SCREENSHOT_HEIGHT = 16000
 
 # Per-user JupyterLab settings written into the temporary settings folder: render every cell
 # (no windowing, so the DOM holds the whole notebook), no empty space after the last cell, no
-# news or update checks (no network here), no extension manager, no autosave.
+# news or update checks (no network here), no extension manager, no autosave; the widgets' state
+# saved with the notebook (the website's build tells progress bars apart by it).
 LAB_SETTINGS = {
+    "@jupyter-widgets/jupyterlab-manager/plugin": {"saveState": True},
     "@jupyterlab/notebook-extension/tracker": {"windowingMode": "none", "scrollPastEnd": False},
     "@jupyterlab/apputils-extension/notification": {
         "fetchNews": "false",
@@ -297,6 +299,10 @@ def start_lab(workdir: Path, notebooks: Path) -> LabServer:
     ):
         (workdir / sub).mkdir()
         env[var] = str(workdir / sub)
+    # The runs' outputs become the website's (tests/site takes them): no notes of this
+    # machine's compile times in them, as in the site's own build. The note itself is tested
+    # in its own notebook, which switches it back on (compile_demo/).
+    env["PENDULUM_LAB_COMPILE_NOTES"] = "off"
     env.pop("JUPYTER_PATH", None)
     env.pop("JUPYTER_CONFIG_PATH", None)
     port = _free_port()
@@ -561,8 +567,10 @@ class NotebookRunner:
     start, once per page). A page that crashed or closed is replaced by a new one.
     """
 
-    def __init__(self, make_workdir):
+    def __init__(self, make_workdir, executions: dict | None = None):
         self._make_workdir = make_workdir
+        #: name -> (the notebook as JupyterLab holds it after a clean run-all, its seconds)
+        self.executions = {} if executions is None else executions
         self._start_error: str | None = None
         self._playwright = None
         self.browser = None
@@ -627,6 +635,13 @@ class NotebookRunner:
         self.current = run
         try:
             self._open_and_run(run)
+            if run.ok and not run.console_errors:
+                # Before any test moves a control: the outputs as the run left them.
+                model = page.evaluate(
+                    """async (p) => { const context = window.__plab.panel(p).context;
+                                      await context.save(); return context.model.toJSON(); }""",
+                    name)
+                self.executions[name] = (model, run.seconds)
         finally:
             self._screenshot(run)
             record_timing(run)

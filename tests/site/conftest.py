@@ -31,14 +31,20 @@ def pytest_collection_modifyitems(config, items):
 
 
 @pytest.fixture(scope="session")
-def course_site():
+def course_site(notebooks_run_in_jupyterlab):
     """The course website, built exactly as ``make docs`` builds it (same folder, same execution
-    cache: notebooks unchanged since the last build are not run again)."""
+    cache: notebooks unchanged since the last build are not run again). The notebooks that
+    ran cleanly in JupyterLab earlier in this session (tests/browser) go into the execution
+    cache first: the build shows their outputs and runs only the others."""
     reason = site_unavailable_reason()
     if reason is not None:
         pytest.fail(f"{reason} (CI=true: the site tests must run)", pytrace=False)
+    notebooks = build_site.DOCS / "notebooks"
+    seeded = build_site.seed_execution_cache(
+        {notebooks / name: run for name, run in notebooks_run_in_jupyterlab.items()})
     result = build_site.build()
-    write_json(ARTIFACTS / "build.json", build_site.report(result))
+    write_json(ARTIFACTS / "build.json", {**build_site.report(result),
+                                          "outputs_from_jupyterlab": seeded})
     return result
 
 

@@ -5,6 +5,8 @@ listed one; and the progress a build prints while it reads the notebooks.
 
 from __future__ import annotations
 
+import copy
+import json
 import re
 
 import pytest
@@ -66,6 +68,45 @@ def test_the_site_follows_the_table_and_reports_each_notebook(tmp_path):
     again = build(tmp_path)
     assert again.ok
     assert "notebooks/01_first: taken from the cache" in again.log
+
+
+def _ran_elsewhere(site, name: str, text: str, stream: str = "stdout",
+                   source: str | None = None) -> dict:
+    """The notebook ``name`` of ``site`` as another front end would hold it after running it:
+    its code cell printed ``text`` on ``stream`` (``source``: its code was edited first)."""
+    ran = copy.deepcopy(json.loads((site / "notebooks" / f"{name}.ipynb").read_text()))
+    ran["metadata"]["language_info"] = {"name": "python"}  # what a front end adds
+    cell = next(cell for cell in ran["cells"] if cell["cell_type"] == "code")
+    cell.update(execution_count=1, source=source or cell["source"],
+                outputs=[{"output_type": "stream", "name": stream, "text": text}])
+    return ran
+
+
+def test_outputs_of_a_run_elsewhere_are_shown_and_other_notebooks_run(tmp_path):
+    """The execution cache seeded from runs elsewhere (the JupyterLab run of tests/browser):
+    the build shows a matching run's outputs; a run of edited code or one that wrote to
+    standard error is not taken, and the build runs those notebooks itself."""
+    site = make_site(tmp_path, course_files("03_third"))
+    site.joinpath("notebooks/00_intro.ipynb").write_text(notebook(Markdown(
+        CONTENTS + "| `03_third` | the third lesson |\n")))
+    runs = {site / "notebooks" / "01_first.ipynb": _ran_elsewhere(site, "01_first", "ELSEWHERE\n"),
+            site / "notebooks" / "02_second.ipynb": _ran_elsewhere(
+                site, "02_second", "EDITED\n", source="print('edited')"),
+            site / "notebooks" / "03_third.ipynb": _ran_elsewhere(
+                site, "03_third", "a warning\n", stream="stderr")}
+    seeded = build_site.seed_execution_cache({path: (ran, 1.5) for path, ran in runs.items()},
+                                             output=site / "_build" / "html")
+    assert seeded == ["01_first"]
+    result = build(site)
+    assert result.ok, "\n".join(result.warnings()) or result.log[-2000:]
+    assert "notebooks/01_first: taken from the cache" in result.log
+    assert re.search(r"notebooks/02_second: executed in [\d.]+ s", result.log)
+    assert re.search(r"notebooks/03_third: executed in [\d.]+ s", result.log)
+    pages = {name: (result.output / "notebooks" / f"{name}.html").read_text(encoding="utf-8")
+             for name in ("01_first", "02_second", "03_third")}
+    assert "ELSEWHERE" in pages["01_first"]
+    assert "EDITED" not in pages["02_second"] and "a warning" not in pages["03_third"]
+    assert "stray" in pages["03_third"]  # its own run's output
 
 
 def test_a_notebook_the_table_does_not_list_stops_the_build_before_anything_runs(tmp_path):
