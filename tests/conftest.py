@@ -5,6 +5,48 @@ JupyterLab."""
 import pytest
 
 import pendulum_lab as pl
+from pendulum_lab.integrators.registry import METHODS
+
+ONE_METHOD_PER_FAMILY = "--one-method-per-family"
+
+
+def pytest_addoption(parser):
+    parser.addoption(
+        ONE_METHOD_PER_FAMILY, action="store_true",
+        help="test the first registered member of each family of methods whose kernels are one "
+             "code with other coefficients (the composition methods; the Gauss-Legendre "
+             "methods), not the others (the floors job of make test)")
+
+
+def same_code_as_a_tested_method() -> set[str]:
+    """The registered methods after the first of their family: a composition method is the
+    one kernel ``composed`` with other weights, a Gauss-Legendre method the one implicit
+    tableau step with another tableau, so the first member exercises the libraries' code
+    that the others would."""
+    seen, others = set(), set()
+    for name, method in METHODS.items():
+        if method.composition is not None:
+            family = "composition"
+        elif method.tableau is not None and method.implicit:
+            family = "implicit tableau"
+        else:
+            continue
+        if family in seen:
+            others.add(name)
+        seen.add(family)
+    return others
+
+
+def pytest_collection_modifyitems(config, items):
+    if not config.getoption(ONE_METHOD_PER_FAMILY):
+        return
+    others = same_code_as_a_tested_method()
+    dropped = [item for item in items if any(
+        isinstance(value, str) and value in others
+        for value in getattr(getattr(item, "callspec", None), "params", {}).values())]
+    if dropped:
+        config.hook.pytest_deselected(items=dropped)
+        items[:] = [item for item in items if item not in dropped]
 
 
 @pytest.fixture(scope="session")

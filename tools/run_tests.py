@@ -64,8 +64,11 @@ def floors_job(python: str, extra: list[str], processes: int = 1) -> tuple[list[
     # tests; at the floors they would repeat the library's runs that the unit tests make. So
     # would the tests marked `plumbing` (the command line's warm-up, the report).
     spread = ["-n", str(processes)] if processes > 1 else []
+    # Of the methods whose kernels are one code with other coefficients (the composition
+    # methods, the Gauss-Legendre methods), the floors test the first of each family.
     command = [python, "-m", "pytest", "-o", "cache_dir=.pytest_cache/floors", *UNIT_SUITE,
-               "--ignore=tests/benchmarks", "-m", "not plumbing", *spread, *extra]
+               "--ignore=tests/benchmarks", "-m", "not plumbing", "--one-method-per-family",
+               *spread, *extra]
     return command, env
 
 
