@@ -64,10 +64,8 @@ MAX_SCREENSHOT_HEIGHT = 16000
 
 # Per-user JupyterLab settings written into the temporary settings folder: render every cell
 # (no windowing, so the DOM holds the whole notebook), no empty space after the last cell, no
-# news or update checks (no network here), no extension manager, no autosave; the widgets' state
-# saved with the notebook (the website's build tells progress bars apart by it).
+# news or update checks (no network here), no extension manager, no autosave.
 LAB_SETTINGS = {
-    "@jupyter-widgets/jupyterlab-manager/plugin": {"saveState": True},
     "@jupyterlab/notebook-extension/tracker": {"windowingMode": "none", "scrollPastEnd": False},
     "@jupyterlab/apputils-extension/notification": {
         "fetchNews": "false",
@@ -279,11 +277,16 @@ class LabServer:
         stop_process_tree(self.process, shutdown_request)
 
 
-def start_lab(workdir: Path, notebooks: Path) -> LabServer:
+#: The setting that saves the widgets' state with a notebook (JupyterLab's default is not to).
+SAVE_WIDGET_STATE = {"@jupyter-widgets/jupyterlab-manager/plugin": {"saveState": True}}
+
+
+def start_lab(workdir: Path, notebooks: Path, save_widget_state: bool = False) -> LabServer:
     root = workdir / "notebooks"
     shutil.copytree(notebooks, root, ignore=shutil.ignore_patterns(".ipynb_checkpoints"))
     settings = workdir / "lab-settings"
-    for plugin, values in LAB_SETTINGS.items():
+    chosen = {**LAB_SETTINGS, **(SAVE_WIDGET_STATE if save_widget_state else {})}
+    for plugin, values in chosen.items():
         target = settings / f"{plugin}.jupyterlab-settings"
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_text(json.dumps(values), encoding="utf-8")
@@ -569,8 +572,11 @@ class NotebookRunner:
 
     def __init__(self, make_workdir, executions: dict | None = None):
         self._make_workdir = make_workdir
-        #: name -> (the notebook as JupyterLab holds it after a clean run-all, its seconds)
-        self.executions = {} if executions is None else executions
+        #: With a dict: name -> (the notebook as JupyterLab holds it after a clean run-all,
+        #: saved with its widgets' state, by which the website's build tells progress bars
+        #: apart; and the run's seconds). Without, notebooks are saved as JupyterLab's default
+        #: saves them, without widget state.
+        self.executions = executions
         self._start_error: str | None = None
         self._playwright = None
         self.browser = None
@@ -588,7 +594,8 @@ class NotebookRunner:
             return
         try:
             workdir = self._make_workdir()
-            self.server = start_lab(workdir, notebook_dir())
+            self.server = start_lab(workdir, notebook_dir(),
+                                    save_widget_state=self.executions is not None)
             from playwright.sync_api import sync_playwright
 
             # Chromium's profile is a temporary one of Playwright's; its caches go here too.
@@ -635,7 +642,7 @@ class NotebookRunner:
         self.current = run
         try:
             self._open_and_run(run)
-            if run.ok and not run.console_errors:
+            if self.executions is not None and run.ok and not run.console_errors:
                 # Before any test moves a control: the outputs as the run left them.
                 model = page.evaluate(
                     """async (p) => { const context = window.__plab.panel(p).context;
