@@ -89,6 +89,17 @@ def pytest_job(name: str, paths: list[str], extra: list[str]) -> tuple[list[str]
              *extra], None)
 
 
+def children_cpu_seconds() -> float | None:
+    """User and system CPU seconds of the reaped child processes and their reaped descendants
+    so far (POSIX), or None where the ``resource`` module does not exist (Windows)."""
+    try:
+        import resource
+    except ImportError:
+        return None
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def lowest_priority() -> dict:
     """Popen arguments that start a process at the lowest scheduling priority: it runs when
     the cores would otherwise idle (POSIX: nice 19, which its children inherit; Windows: the
@@ -124,17 +135,25 @@ def run_queue(extra: list[str], floors: str | None, workers: int = 2) -> int:
                 queued += 1
             time.sleep(1.0)
             for name, (process, log, since, _) in list(running.items()):
+                before = children_cpu_seconds()
                 if process.poll() is None:
                     continue
                 codes[name] = process.returncode
                 minutes[name] = (time.perf_counter() - since) / 60
+                # The job's processes' CPU time, counted when the job is reaped (None on Windows).
+                cpu = children_cpu_seconds()
+                spent = "" if cpu is None else f", {(cpu - before) / 60:.1f} min CPU"
                 log.seek(0)
-                print(f"\n{'=' * 30} {name} (exit {codes[name]}, {minutes[name]:.1f} min) "
-                      f"{'=' * 30}", flush=True)
+                print(f"\n{'=' * 30} {name} (exit {codes[name]}, {minutes[name]:.1f} min"
+                      f"{spent}) {'=' * 30}", flush=True)
                 sys.stdout.write(log.read())
                 log.close()
                 del running[name]
     total = (time.perf_counter() - started) / 60
+    cpu = children_cpu_seconds()
+    if cpu is not None:
+        print(f"\nall jobs: {cpu / 60:.1f} min CPU in {total:.1f} min wall on "
+              f"{os.cpu_count()} cores", flush=True)
     summary = ", ".join(f"{name} exit {code} ({minutes[name]:.1f} min)"
                         for name, code in codes.items())
     print(f"\nwhole suite: {total:.1f} min wall ({summary})", flush=True)
