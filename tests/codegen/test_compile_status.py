@@ -114,12 +114,14 @@ def test_bad_arguments_are_refused():
 
 
 # ------------------------------------------------------------------------------- the note
-def test_the_note_says_what_compiles_after_the_delay(fresh_cache, capsys):
+def test_the_note_says_what_compiles_after_the_delay(fresh_cache, capsys, monkeypatch):
     cache.load_generated("status_test_c", slow_source(0.3, "c"), what="a slow test module")
     err = capsys.readouterr().err.splitlines()
     assert err[0] == "compiling a slow test module, once per machine…"
     assert err[-1].startswith("compiled a slow test module in ")
-    # negative control: a quick compilation says nothing
+    # negative control: a compilation that ends before the delay says nothing (a delay far
+    # beyond it, so that a loaded machine cannot make the quick one slow)
+    monkeypatch.setattr(compile_status, "NOTE_DELAY", 60.0)
     cache.load_generated("status_test_d", slow_source(0.0, "d"), what="a quick test module")
     assert capsys.readouterr().err == ""
 
