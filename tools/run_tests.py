@@ -6,8 +6,8 @@ environment runs them under nbval, the install tests build a student's environme
 floors run the unit suite under the oldest supported versions. Much of a job's time is spent
 waiting on a kernel, a browser or an installer, so on a machine with two cores the jobs run two
 at a time, in the order below, and each core that a job leaves takes the next job of the queue;
-the floors job, last, spreads its tests over two processes. Each job's output is printed when it ends; the run
-fails if any job fails.
+the floors job, last, spreads its tests over two processes. Each job's output is printed when it
+ends; the run fails if any job fails.
 
 * ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
   ``tests/site``);
