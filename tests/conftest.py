@@ -41,12 +41,15 @@ def pytest_collection_modifyitems(config, items):
     if not config.getoption(ONE_METHOD_PER_FAMILY):
         return
     others = same_code_as_a_tested_method()
-    dropped = [item for item in items if any(
-        isinstance(value, str) and value in others
-        for value in getattr(getattr(item, "callspec", None), "params", {}).values())]
+    kept, dropped = [], []
+    for item in items:
+        params = getattr(getattr(item, "callspec", None), "params", {})
+        names_another = any(isinstance(value, str) and value in others
+                            for value in params.values())
+        (dropped if names_another else kept).append(item)
     if dropped:
         config.hook.pytest_deselected(items=dropped)
-        items[:] = [item for item in items if item not in dropped]
+        items[:] = kept
 
 
 @pytest.fixture(scope="session")
