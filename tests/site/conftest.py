@@ -10,7 +10,7 @@ import pytest
 from site_harness import (
     ARTIFACTS,
     SCREENSHOTS,
-    api_pages_checked_in_light_only,
+    api_pages_checked_in_one_mode,
     build_site,
     crawl,
     in_ci,
@@ -50,13 +50,14 @@ def course_site(notebooks_run_in_jupyterlab):
 
 @pytest.fixture(scope="session")
 def course_pages(course_site):
-    """Every page of the course site opened in Chromium in light and dark mode: the records
-    and the problems found, by category. Screenshots go to test-artifacts/site/screenshots/."""
+    """Every page of the course site opened in Chromium in light and dark mode (the API pages
+    but the first in one of them): the records and the problems found, by category.
+    Screenshots go to test-artifacts/site/screenshots/."""
     if not course_site.ok:
         pytest.fail("the course site did not build; see test_site_builds", pytrace=False)
     shutil.rmtree(SCREENSHOTS, ignore_errors=True)
     reports = crawl(course_site.output, screenshots=SCREENSHOTS,
-                    first_mode_only=api_pages_checked_in_light_only(course_site.output))
+                    one_mode=api_pages_checked_in_one_mode(course_site.output))
     found = problems(reports, course_site.output)
     write_json(ARTIFACTS / "pages.json", {**summary(reports), "problems": found})
     return reports, found

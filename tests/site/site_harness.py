@@ -40,6 +40,9 @@ MAX_SCREENSHOT_HEIGHT = 8000
 #: a second of Chromium's time per page.
 LATER_MODES_SCREENSHOT_HEIGHT = 2 * 900
 MODES = ("light", "dark")
+#: Every host name but the local server's address resolves to nothing: a page's request to
+#: another host fails at once (and is recorded as a problem), offline or not.
+BLOCK_OTHER_HOSTS = "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1"
 PLAY_SECONDS = 1.5
 
 CATEGORIES = (
@@ -260,12 +263,13 @@ def embedded_animations(html_file: Path) -> int:
     return len(_EMBEDDED_ANIMATION.findall(html_file.read_text(encoding="utf-8", errors="replace")))
 
 
-def api_pages_checked_in_light_only(html_dir) -> tuple[str, ...]:
-    """The API reference pages but the first: text from one template, without pictures, so one
-    of them stands for all in dark mode and on screenshots (they are half of the site's pages
-    and most of its crawling time). Every page is still checked in light mode."""
+def api_pages_checked_in_one_mode(html_dir) -> dict[str, str]:
+    """The API reference pages but the first, each with the one mode it is checked in (light
+    and dark in turn): text from one template, without pictures, so the first stands for all
+    on screenshots and each is checked once (they are half of the site's pages, and the two
+    modes' crawls run side by side, so they share them out)."""
     reference = sorted(p for p in list_pages(html_dir) if p.startswith("reference/"))
-    return tuple(reference[1:])
+    return {page: MODES[number % len(MODES)] for number, page in enumerate(reference[1:])}
 
 
 def _screenshot_name(page: str) -> str:
@@ -278,11 +282,12 @@ def crawl(
     modes: tuple[str, ...] = MODES,
     screenshots: Path | None = None,
     play_animations: bool = True,
-    first_mode_only: tuple[str, ...] = (),
+    one_mode: dict[str, str] | None = None,
 ) -> list[PageReport]:
     """Open every page (or ``pages``) of the site in ``html_dir`` in Chromium, in each mode.
 
-    The pages of ``first_mode_only`` are opened in the first mode only, without a screenshot.
+    The pages of ``one_mode`` (page -> mode) are opened in that mode only, without a
+    screenshot.
 
     Requests to any host other than the local server are recorded and blocked. Animations are
     played in the first mode only. Screenshots (whole page, at most 8000 px tall, in the
@@ -292,10 +297,10 @@ def crawl(
     the time goes into Chromium's rendering and screenshots, one core per browser.
     """
     pages = list_pages(html_dir) if pages is None else pages
-    skipped = set(first_mode_only)
+    one_mode = one_mode or {}
     jobs = [
-        (html_dir, pages if mode == modes[0] else [p for p in pages if p not in skipped], mode,
-         screenshots, play_animations and mode == modes[0], skipped,
+        (html_dir, [p for p in pages if one_mode.get(p, mode) == mode], mode, screenshots,
+         play_animations and mode == modes[0], tuple(one_mode),
          MAX_SCREENSHOT_HEIGHT if mode == modes[0] else LATER_MODES_SCREENSHOT_HEIGHT)
         for mode in modes
     ]
@@ -312,7 +317,8 @@ def _crawl_mode(html_dir, pages, mode, screenshots, play, unshot=(),
 
     reports = []
     with serve(html_dir) as base, sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
+        browser = p.chromium.launch(executable_path=chromium_path(),
+                                    args=[*CHROMIUM_ARGS, BLOCK_OTHER_HOSTS])
         try:
             context = browser.new_context(viewport=VIEWPORT, color_scheme=mode)
             # The theme keeps the reader's choice in localStorage; set it as a reader would.
@@ -337,13 +343,10 @@ def _visit(context, base: str, page_path: str, mode: str, screenshots, play: boo
     local = urlsplit(base).netloc
     page = context.new_page()
 
-    def route(r):
-        url = r.request.url
-        if urlsplit(url).scheme in ("http", "https", "ws", "wss") and urlsplit(url).netloc != local:
-            report.external_requests.append(url)
-            r.abort()
-        else:
-            r.continue_()
+    def request(r):
+        parts = urlsplit(r.url)
+        if parts.scheme in ("http", "https", "ws", "wss") and parts.netloc != local:
+            report.external_requests.append(r.url)
 
     def response(resp):
         if resp.status >= 400 and urlsplit(resp.url).netloc == local:
@@ -353,7 +356,9 @@ def _visit(context, base: str, page_path: str, mode: str, screenshots, play: boo
         if message.type == "error":
             report.console_errors.append(message.text[:300])
 
-    page.route("**/*", route)
+    # Recorded here, blocked by Chromium's resolver (BLOCK_OTHER_HOSTS): a route would hold
+    # up every request of the site's own on its way through Playwright.
+    page.on("request", request)
     page.on("response", response)
     page.on("console", console)
     page.on("pageerror", lambda exc: report.console_errors.append(f"uncaught: {exc}"[:300]))
