@@ -53,6 +53,16 @@ def pytest_collection_modifyitems(config, items):
 
 
 @pytest.fixture(scope="session")
+def method_tested(request):
+    """Whether this run tests a registered method: every one, but under
+    ``--one-method-per-family`` not the later members of a family (for the loops inside a
+    test, which the collection filter above cannot see)."""
+    others = (same_code_as_a_tested_method() if request.config.getoption(ONE_METHOD_PER_FAMILY)
+              else set())
+    return lambda name: name not in others
+
+
+@pytest.fixture(scope="session")
 def elastic():
     return pl.elastic_pendulum()
 

@@ -6,17 +6,13 @@ environment runs them under nbval, the install tests build a student's environme
 floors run the unit suite under the oldest supported versions. Much of a job's time is spent
 waiting on a kernel, a browser or an installer, so on a machine with two cores the jobs run two
 at a time, in the order below, and each core that a job leaves takes the next job of the queue;
-the floors job, last, spreads its tests over two processes. The graded assignments wait most
-of all (on sandboxed kernels and the grader's time limits: about half a core on their own), so
-they start at once beside the queue and take no place in it. Each job's output is printed when
-it ends; the run fails if any job fails.
+the floors job, last, spreads its tests over two processes. Each job's output is printed when it
+ends; the run fails if any job fails.
 
 * ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
   ``tests/site``);
-* ``assignments``: the graded assignments, built and graded in sandboxes
-  (``tests/assignments``), beside the queue;
 * ``core``: everything else in the main environment: doctests, unit, property and symbolic
-  tests;
+  tests, and the graded assignments;
 * ``environments``: the tests that build environments of their own and start servers in them
   (``tests/binder``: Binder's environment, where the notebooks' nbval run happens;
   ``tests/install``: a student's, from a fresh clone, the sdist and the wheel; ``tests/hub``: a
@@ -46,17 +42,16 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 #: The jobs in the main environment, by the folders they test (``core`` takes what is left).
 FOLDERS = {"browser": ["tests/browser", "tests/site"],
-           "assignments": ["tests/assignments"],
            "environments": ["tests/binder", "tests/install", "tests/hub"]}
 ELSEWHERE = [folder for folders in FOLDERS.values() for folder in folders]
-#: The unit suite, what ``make check`` runs: without notebooks, browser, website, Binder,
-#: installs or the graded assignments.
 CORE = ["src", "tests"] + [f"--ignore={path}" for path in ELSEWHERE]
-#: The order jobs take the workers in: the longest first (measured on a clean clone, see
-#: docs/testing.md); the floors last, whatever their length, as they alone can use two cores.
+#: What ``make check`` runs: the unit suite, without notebooks, browser, website, Binder,
+#: installs or the graded assignments.
+UNIT_SUITE = ["src", "tests"] + [f"--ignore={path}"
+                                 for path in [*ELSEWHERE, "tests/assignments"]]
+#: The order jobs start in: the longest first (measured on a clean clone, see docs/testing.md);
+#: the floors last, whatever their length, as they alone can use two cores.
 ORDER = ["browser", "core", "environments", "floors"]
-#: The jobs that start at once beside the queue, taking no worker: they mostly wait.
-BESIDE = ["assignments"]
 
 
 def floors_job(python: str, extra: list[str], processes: int = 1) -> tuple[list[str], dict]:
@@ -71,7 +66,7 @@ def floors_job(python: str, extra: list[str], processes: int = 1) -> tuple[list[
     spread = ["-n", str(processes)] if processes > 1 else []
     # Of the methods whose kernels are one code with other coefficients (the composition
     # methods, the Gauss-Legendre methods), the floors test the first of each family.
-    command = [python, "-m", "pytest", "-o", "cache_dir=.pytest_cache/floors", *CORE,
+    command = [python, "-m", "pytest", "-o", "cache_dir=.pytest_cache/floors", *UNIT_SUITE,
                "--ignore=tests/benchmarks", "-m", "not plumbing", "--one-method-per-family",
                *spread, *extra]
     return command, env
@@ -108,15 +103,7 @@ def run_queue(extra: list[str], floors: str | None, workers: int = 2) -> int:
     jobs.update({name: pytest_job(name, folders, extra) for name, folders in FOLDERS.items()})
     if floors is not None:
         jobs["floors"] = floors_job(floors, extra, processes=workers)
-    return run_jobs(jobs, ORDER, BESIDE, workers)
-
-
-def run_jobs(jobs: dict[str, tuple[list[str], dict | None]], order: list[str],
-             beside: list[str], workers: int) -> int:
-    """Run ``jobs`` (name -> command and environment): those of ``beside`` at once, those of
-    ``order`` ``workers`` at a time in that order; print each job's output as it ends, and
-    the times. The highest exit code is returned."""
-    waiting = [(name, *jobs[name]) for name in order if name in jobs]
+    waiting = [(name, *jobs[name]) for name in ORDER if name in jobs]
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as logs:
         running, codes, minutes = {}, {}, {}
@@ -128,11 +115,8 @@ def run_jobs(jobs: dict[str, tuple[list[str], dict | None]], order: list[str],
                              time.perf_counter())
             print(f"{name}: {' '.join(command[1:])}", flush=True)
 
-        for name in beside:
-            if name in jobs:
-                start(name, *jobs[name])
         while waiting or running:
-            while waiting and sum(name not in beside for name in running) < workers:
+            while waiting and len(running) < workers:
                 start(*waiting.pop(0))
             time.sleep(1.0)
             for name, (process, log, since) in list(running.items()):

@@ -205,9 +205,10 @@ def test_symplectic_methods_preserve_the_symplectic_form(name):
 
 
 @pytest.mark.parametrize("name", NOT_SYMPLECTIC)
-def test_non_symplectic_methods_fail_the_same_check(name):
+def test_non_symplectic_methods_fail_the_same_check(name, method_tested):
     worst_symplectic = max(
         analysis.symplecticity_defect(DP, Q0, p0=P0, dt=0.05, method=m) for m in SYMPLECTIC
+        if method_tested(m)
     )
     defect = analysis.symplecticity_defect(DP, Q0, p0=P0, dt=0.05, method=name)
     assert defect >= 100 * max(worst_symplectic, 1e-8)

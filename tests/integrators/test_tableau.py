@@ -143,12 +143,12 @@ def test_extrapolation_continues_polynomials_of_degree_below_s(stages):
     assert TRAPEZOIDAL.extrapolation is not None and RK4.extrapolation is None
 
 
-def test_evaluation_counts_come_from_the_stages():
+def test_evaluation_counts_come_from_the_stages(method_tested):
     dp = pl.double_pendulum()
     for name in ("explicit_euler", "rk4"):
         run = pl.simulate(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, dt=0.01, method=name)
         assert run.evaluations == 100 * METHODS[name].tableau.stages
-    for name in ("glrk4", "glrk8", "glrk12", "glrk16"):
+    for name in filter(method_tested, ("glrk4", "glrk8", "glrk12", "glrk16")):
         run = pl.simulate(dp, [1.0, 1.5], [0.0, 0.0], t_end=1.0, dt=0.01, method=name)
         sweeps = run.mean_iterations * 100
         # the first step evaluates its guess f(y); every later step starts from

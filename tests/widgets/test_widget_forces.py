@@ -58,6 +58,7 @@ def test_a_method_simulate_refuses_is_refused_with_its_reason(build):
     assert build(SIMPLE, [0.2], [0.0], t_end=2.0, method="leapfrog").trajectory is not None
 
 
+@pytest.mark.plumbing  # every registered method compiled for four models, to compare menus
 @pytest.mark.parametrize("model", [DRIVEN, pl.double_pendulum(damping=0.1), SIMPLE,
                                    pl.double_pendulum(drive_amplitude=1.0, drive_frequency=2.0)],
                          ids=["driven", "damped double", "simple", "driven double"])
