@@ -37,10 +37,16 @@ def same_code_as_a_tested_method() -> set[str]:
     return others
 
 
+def methods_left_out(config) -> set[str]:
+    """The registered methods this run does not test: none, or under
+    ``--one-method-per-family`` the later members of each family."""
+    return same_code_as_a_tested_method() if config.getoption(ONE_METHOD_PER_FAMILY) else set()
+
+
 def pytest_collection_modifyitems(config, items):
-    if not config.getoption(ONE_METHOD_PER_FAMILY):
+    others = methods_left_out(config)
+    if not others:
         return
-    others = same_code_as_a_tested_method()
     kept, dropped = [], []
     for item in items:
         params = getattr(getattr(item, "callspec", None), "params", {})
@@ -57,8 +63,7 @@ def method_tested(request):
     """Whether this run tests a registered method: every one, but under
     ``--one-method-per-family`` not the later members of a family (for the loops inside a
     test, which the collection filter above cannot see)."""
-    others = (same_code_as_a_tested_method() if request.config.getoption(ONE_METHOD_PER_FAMILY)
-              else set())
+    others = methods_left_out(request.config)
     return lambda name: name not in others
 
 
