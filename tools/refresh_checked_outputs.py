@@ -1,4 +1,4 @@
-"""Re-execute course notebooks and store only the outputs nbval compares.
+"""Re-execute course notebooks and store only the outputs nbval compares; compare a run's.
 
 Usage::
 
@@ -10,11 +10,17 @@ cell's number and changes nothing on disk. Then every code cell loses its
 outputs and execution count except those marked ``# NBVAL_CHECK_OUTPUT``, and
 the notebook's saved widget state is dropped (it causes "Error displaying
 widget" after a restart). Run ``ruff format`` on the result afterwards.
+
+``differences`` compares the checked cells of a notebook run elsewhere (JupyterLab's, in
+tests/browser) with the stored outputs by nbval's rule for these cells (notebooks/conftest.py):
+the standard output, its streams joined, carriage returns and backspaces applied; standard
+error left out; any other output is a difference.
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 from pathlib import Path
@@ -25,8 +31,51 @@ from nbclient import NotebookClient
 CHECK_MARKER = "# NBVAL_CHECK_OUTPUT"
 
 
+def _joined(text) -> str:
+    """A notebook's multi-line string: saved as a list of lines or as one string."""
+    return "".join(text) if isinstance(text, list) else text
+
+
 def is_checked(cell) -> bool:
-    return cell.cell_type == "code" and CHECK_MARKER in cell.source
+    return cell.get("cell_type") == "code" and CHECK_MARKER in _joined(cell.get("source", ""))
+
+
+def printed(cell) -> tuple[str, list[str]]:
+    """A cell's standard output as nbval compares it, and the kinds of its other outputs
+    (standard error left out)."""
+    stdout, others = "", []
+    for output in cell.get("outputs", []):
+        if output.get("output_type") == "stream":
+            if output.get("name") == "stdout":
+                stdout += _joined(output.get("text", ""))
+        else:
+            others.append(output.get("output_type", "?"))
+    while True:  # a character followed by a backspace cancels out, as a terminal shows it
+        shorter = re.sub(r"[^\n]\x08", "", stdout)
+        if shorter == stdout:
+            break
+        stdout = shorter
+    # what a carriage return not ending the line overwrites
+    return re.sub(r"^.*\r(?=[^\n])", "", stdout, flags=re.MULTILINE), others
+
+
+def differences(stored, ran) -> list[str]:
+    """Where the checked cells of ``ran`` (a notebook's JSON after a run) print other than
+    ``stored`` (the notebook as committed) prints. The two hold the same cells."""
+    stored_cells, ran_cells = stored["cells"], ran["cells"]
+    if len(stored_cells) != len(ran_cells):
+        return [f"the run has {len(ran_cells)} cells, the notebook {len(stored_cells)}"]
+    found = []
+    for index, (expected, actual) in enumerate(zip(stored_cells, ran_cells, strict=True)):
+        if not is_checked(expected):
+            continue
+        want, _ = printed(expected)
+        got, others = printed(actual)
+        if others:
+            found.append(f"cell {index}: outputs besides the printed text: {others}")
+        if got != want:
+            found.append(f"cell {index}: printed\n{got}\ninstead of the stored\n{want}")
+    return found
 
 
 def problems(nb) -> list[str]:

@@ -2,27 +2,29 @@
 
 The suite's time goes mostly to running notebooks and building environments: the browser tests
 run every notebook in JupyterLab (the website's build shows those runs' outputs), the Binder
-environment runs them under nbval, the install tests build a student's environment, the
-floors run the unit suite under the oldest supported versions. Much of a job's time is spent
-waiting on a kernel, a browser or an installer, so on a machine with two cores the jobs run two
-at a time, in the order below, and each core that a job leaves takes the next job of the queue;
-the floors job, last, spreads its tests over two processes. Each job's output is printed when it
-ends; the run fails if any job fails.
+test builds Binder's environment and runs a few of them there under nbval, the install tests
+build a student's environment, the floors run the unit suite under the oldest supported
+versions. On a machine with two cores the jobs run two at a time, in the order below, and each
+core that a job leaves takes the next job of the queue. Much of a job's time is spent waiting
+on a kernel, a browser, an installer or a grader's time limit, so the floors job is not
+queued: it starts at once at the lowest scheduling priority, spread over two processes, and
+takes the cores whenever the queued jobs leave them idle (and all of them once those are done).
+Each job's output is printed when it ends; the run fails if any job fails.
 
 * ``browser``: the notebooks in JupyterLab in Chromium, and the website (``tests/browser``,
   ``tests/site``);
 * ``core``: everything else in the main environment: doctests, unit, property and symbolic
   tests, and the graded assignments;
 * ``environments``: the tests that build environments of their own and start servers in them
-  (``tests/binder``: Binder's environment, where the notebooks' nbval run happens;
+  (``tests/binder``: Binder's environment, where three notebooks run under nbval;
   ``tests/install``: a student's, from a fresh clone, the sdist and the wheel; ``tests/hub``: a
   class on a JupyterHub);
 * ``floors`` (with ``--floors PYTHON``): the unit suite (what ``make check`` runs) under the
   interpreter of the environment with the oldest supported versions pinned (``make
   test-floors``), with its own kernel caches (compiled code differs between library versions).
-  It starts last and spreads its tests over as many processes as the queue has workers
-  (pytest-xdist): a queue of whole jobs ends with one core idle while the last job runs, and
-  the floors' many small tests are the work that can fill both.
+  It runs in the background from the start, at the lowest priority, its tests spread over as
+  many processes as the queue has workers (pytest-xdist): its many small tests are the work
+  that can fill the cores whenever the other jobs wait, and both at the end.
 
 Servers pick free ports and environments live in folders of their own, so jobs never compete
 for a port or a folder. With one core (or ``--serial``) it runs a single pytest over everything,
@@ -49,9 +51,9 @@ CORE = ["src", "tests"] + [f"--ignore={path}" for path in ELSEWHERE]
 #: installs or the graded assignments.
 UNIT_SUITE = ["src", "tests"] + [f"--ignore={path}"
                                  for path in [*ELSEWHERE, "tests/assignments"]]
-#: The order jobs start in: the longest first (measured on a clean clone, see docs/testing.md);
-#: the floors last, whatever their length, as they alone can use two cores.
-ORDER = ["browser", "core", "environments", "floors"]
+#: The order the queue's jobs start in: the longest first (measured on a clean clone, see
+#: docs/testing.md). The floors are not queued: they start at once in the background.
+ORDER = ["browser", "core", "environments"]
 
 
 def floors_job(python: str, extra: list[str], processes: int = 1) -> tuple[list[str], dict]:
@@ -98,28 +100,41 @@ def children_cpu_seconds() -> float | None:
     return usage.ru_utime + usage.ru_stime
 
 
+def lowest_priority() -> dict:
+    """Popen arguments that start a process at the lowest scheduling priority: it runs when
+    the cores would otherwise idle (POSIX: nice 19, which its children inherit; Windows: the
+    idle priority class)."""
+    if os.name == "nt":
+        return {"creationflags": getattr(subprocess, "IDLE_PRIORITY_CLASS", 0x40)}
+    return {"preexec_fn": lambda: os.nice(19)}
+
+
 def run_queue(extra: list[str], floors: str | None, workers: int = 2) -> int:
     jobs = {"core": pytest_job("core", CORE, extra)}
     jobs.update({name: pytest_job(name, folders, extra) for name, folders in FOLDERS.items()})
-    if floors is not None:
-        jobs["floors"] = floors_job(floors, extra, processes=workers)
     waiting = [(name, *jobs[name]) for name in ORDER if name in jobs]
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as logs:
         running, codes, minutes = {}, {}, {}
 
-        def start(name, command, env):
+        def start(name, command, env, background=False):
             log = open(Path(logs) / f"{name}.log", "w+", encoding="utf-8")  # noqa: SIM115 (closed below)
-            running[name] = (subprocess.Popen(command, cwd=ROOT, stdout=log, env=env,
-                                              stderr=subprocess.STDOUT), log,
-                             time.perf_counter())
-            print(f"{name}: {' '.join(command[1:])}", flush=True)
+            process = subprocess.Popen(command, cwd=ROOT, stdout=log, env=env,
+                                       stderr=subprocess.STDOUT,
+                                       **(lowest_priority() if background else {}))
+            running[name] = (process, log, time.perf_counter(), background)
+            print(f"{name}{' (in the background)' if background else ''}: "
+                  f"{' '.join(command[1:])}", flush=True)
 
+        if floors is not None:
+            start("floors", *floors_job(floors, extra, processes=workers), background=True)
         while waiting or running:
-            while waiting and len(running) < workers:
+            queued = sum(not background for *_, background in running.values())
+            while waiting and queued < workers:
                 start(*waiting.pop(0))
+                queued += 1
             time.sleep(1.0)
-            for name, (process, log, since) in list(running.items()):
+            for name, (process, log, since, _) in list(running.items()):
                 before = children_cpu_seconds()
                 if process.poll() is None:
                     continue

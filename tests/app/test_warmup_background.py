@@ -10,6 +10,10 @@ import pytest
 
 from pendulum_lab.app import cli, warmup
 
+# The warm-up's wiring (jobs, progress, a background process, the notebook's button) over
+# compilations the unit tests make: not again at the floors.
+pytestmark = pytest.mark.plumbing
+
 ONE_METHOD = ["explicit_euler"]
 
 

@@ -546,6 +546,8 @@ class NotebookRun:
     cells: list[dict] = field(default_factory=list)
     screenshot: Path | None = None
     console_errors: list[str] = field(default_factory=list)
+    #: After a clean run: the notebook as JupyterLab holds it (nbformat's JSON), outputs and all.
+    model: dict | None = None
 
     @property
     def ok(self) -> bool:
@@ -642,13 +644,14 @@ class NotebookRunner:
         self.current = run
         try:
             self._open_and_run(run)
-            if self.executions is not None and run.ok and not run.console_errors:
+            if run.ok:
                 # Before any test moves a control: the outputs as the run left them.
-                model = page.evaluate(
+                run.model = page.evaluate(
                     """async (p) => { const context = window.__plab.panel(p).context;
                                       await context.save(); return context.model.toJSON(); }""",
                     name)
-                self.executions[name] = (model, run.seconds)
+                if self.executions is not None and not run.console_errors:
+                    self.executions[name] = (run.model, run.seconds)
         finally:
             self._screenshot(run)
             record_timing(run)

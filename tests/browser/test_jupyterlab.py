@@ -6,6 +6,8 @@ execution count and the kernel is Idle again. Then they check:
 
 * no cell raised (no error output, no "Traceback" in any output; plain stderr such as warnings
   is allowed), and no output reads "Error displaying widget";
+* every cell marked ``# NBVAL_CHECK_OUTPUT`` prints what the notebook stores (nbval's rule:
+  standard output compared, standard error left out);
 * every cell marked as below shows what it promises;
 * the first slider with an editable value box moves the figure next to it, the first dropdown
   changes it, and a Play button makes the value it drives advance.
@@ -37,6 +39,8 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib.util
+import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -45,6 +49,10 @@ import pytest
 from lab_harness import SCREENSHOTS, NotebookRun, list_notebooks, notebook_dir
 
 NOTEBOOKS = list_notebooks()
+_TOOL = Path(__file__).resolve().parents[2] / "tools" / "refresh_checked_outputs.py"
+_spec = importlib.util.spec_from_file_location("refresh_checked_outputs", _TOOL)
+checked_outputs = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(checked_outputs)
 if not NOTEBOOKS:
     pytest.skip(
         f"no notebooks (*.ipynb) in {notebook_dir()}: nothing to open in the browser",
@@ -58,6 +66,12 @@ def test_run_all_cells(notebook_runner, notebook):
     run = notebook_runner.get(notebook)
     if not run.ok:
         pytest.fail(run.report(), pytrace=False)
+    # The course's check of printed results: the cells marked NBVAL_CHECK_OUTPUT print what
+    # the notebook stores (nbval's rule; Binder's environment runs a few notebooks under nbval
+    # itself, tests/binder).
+    stored = json.loads((notebook_dir() / notebook).read_text(encoding="utf-8"))
+    differences = checked_outputs.differences(stored, run.model)
+    assert not differences, "\n".join(differences)
 
 
 # ---------------------------------------------------------------------------------------------

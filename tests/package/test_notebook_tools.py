@@ -1,4 +1,5 @@
-"""The script that stores checked notebook outputs keeps exactly what nbval compares."""
+"""The script that stores checked notebook outputs keeps exactly what nbval compares, and
+compares a run's checked outputs with them by the same rule."""
 
 import importlib.util
 from pathlib import Path
@@ -42,3 +43,38 @@ def test_widget_state_is_dropped():
     nb = nbformat.v4.new_notebook()
     nb.metadata["widgets"] = {"application/vnd.jupyter.widget-state+json": {}}
     assert "widgets" not in tool.keep_checked_outputs(nb).metadata
+
+
+def run_of(*outputs_per_cell, checked=True):
+    """A notebook's JSON with one code cell per list of outputs, each marked as checked."""
+    marker = "# NBVAL_CHECK_OUTPUT\n" if checked else ""
+    return {"cells": [{"cell_type": "code", "source": [marker, "print(x)"], "outputs": outputs}
+                      for outputs in outputs_per_cell]}
+
+
+def stdout(text, name="stdout"):
+    return {"output_type": "stream", "name": name, "text": text}
+
+
+def test_a_run_printing_what_is_stored_has_no_differences():
+    stored = run_of([stdout(["energy error 1.5e-03\n", "order 2\n"])])
+    # JupyterLab joins the streams and saves the text as one string; stderr is left out
+    ran = run_of([stdout("energy error 1.5e-03\n"), stdout("a warning\n", "stderr"),
+                  stdout("order 2\n")])
+    assert tool.differences(stored, ran) == []
+    # a progress line overwritten in place prints what its last state shows
+    assert tool.differences(run_of([stdout("done\n")]),
+                            run_of([stdout("10%\r50%\rdone\n")])) == []
+
+
+def test_each_difference_in_a_checked_cell_is_found():
+    stored = run_of([stdout("order 2\n")], [stdout("1.00\n")])
+    one_digit = run_of([stdout("order 2\n")], [stdout("1.01\n")])
+    assert ["cell 1" in found for found in tool.differences(stored, one_digit)] == [True]
+    figure = {"output_type": "display_data", "data": {"text/plain": "<Figure>"}, "metadata": {}}
+    extra = run_of([stdout("order 2\n"), figure], [stdout("1.00\n")])
+    assert "besides the printed text" in tool.differences(stored, extra)[0]
+    assert tool.differences(stored, run_of([stdout("order 2\n")])) != []
+    # a cell that is not marked is not compared
+    assert tool.differences(run_of([stdout("1\n")], checked=False),
+                            run_of([stdout("2\n")], checked=False)) == []
