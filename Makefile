@@ -85,7 +85,8 @@ lab: $(VENV)/.installed-lab
 	$(BIN)/pendulum-lab $(ARGS)
 
 # A queue of pytest jobs, two at a time, longest first (tools/run_tests.py; --serial for one):
-# the browser and the website, the core, the floors, the environments (Binder, the installs).
+# the browser and the website, the core, the environments (Binder, the installs, the hub); the
+# floors beside them from the start, at the lowest priority.
 test: $(VENV)/.installed-test $(FLOORS_BIN)/.installed $(MATHJAX) $(HUB_PROXY)
 	$(BIN)/ruff check .
 	$(BIN)/python tools/run_tests.py --floors $(FLOORS_BIN)/python

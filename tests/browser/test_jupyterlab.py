@@ -48,11 +48,13 @@ from pathlib import Path
 import pytest
 from lab_harness import SCREENSHOTS, NotebookRun, list_notebooks, notebook_dir
 
-NOTEBOOKS = list_notebooks()
+# How checked outputs are stored and compared (tools/ is not a package).
 _TOOL = Path(__file__).resolve().parents[2] / "tools" / "refresh_checked_outputs.py"
 _spec = importlib.util.spec_from_file_location("refresh_checked_outputs", _TOOL)
 checked_outputs = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(checked_outputs)
+
+NOTEBOOKS = list_notebooks()
 if not NOTEBOOKS:
     pytest.skip(
         f"no notebooks (*.ipynb) in {notebook_dir()}: nothing to open in the browser",
