@@ -18,7 +18,8 @@ Each job's output is printed when it ends; the run fails if any job fails.
 * ``environments``: the tests that build environments of their own and start servers in them
   (``tests/binder``: Binder's environment, where three notebooks run under nbval;
   ``tests/install``: a student's, from a fresh clone, the sdist and the wheel; ``tests/hub``: a
-  class on a JupyterHub);
+  class on a JupyterHub), and the benchmark items' smoke runs (``tests/benchmarks``: fresh
+  interpreters with empty caches, a Dask cluster), which balance the two cores;
 * ``floors`` (with ``--floors PYTHON``): the unit suite (what ``make check`` runs) under the
   interpreter of the environment with the oldest supported versions pinned (``make
   test-floors``), with its own kernel caches (compiled code differs between library versions).
@@ -43,14 +44,17 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 #: The jobs in the main environment, by the folders they test (``core`` takes what is left).
+#: The benchmark items' smoke runs go with the environments: the core job is the longest, and
+#: the browser job and the environments together were about four minutes shorter.
 FOLDERS = {"browser": ["tests/browser", "tests/site"],
-           "environments": ["tests/binder", "tests/install", "tests/hub"]}
+           "environments": ["tests/binder", "tests/install", "tests/hub", "tests/benchmarks"]}
 ELSEWHERE = [folder for folders in FOLDERS.values() for folder in folders]
 CORE = ["src", "tests"] + [f"--ignore={path}" for path in ELSEWHERE]
 #: What ``make check`` runs: the unit suite, without notebooks, browser, website, Binder,
-#: installs or the graded assignments.
-UNIT_SUITE = ["src", "tests"] + [f"--ignore={path}"
-                                 for path in [*ELSEWHERE, "tests/assignments"]]
+#: installs, the hub or the graded assignments.
+UNIT_SUITE = ["src", "tests"] + [
+    f"--ignore={path}" for path in ["tests/browser", "tests/site", "tests/binder",
+                                    "tests/install", "tests/hub", "tests/assignments"]]
 #: The order the queue's jobs start in: the longest first (measured on a clean clone, see
 #: docs/testing.md). The floors are not queued: they start at once in the background.
 ORDER = ["browser", "core", "environments"]
