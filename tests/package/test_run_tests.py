@@ -1,6 +1,7 @@
-"""The suite runner's background job (tools/run_tests.py): the floors start at the lowest
-scheduling priority, so that they take only the cores the queued jobs leave idle. The POSIX
-branch is run for real; the Windows branch by emulation (``os.name``)."""
+"""The suite runner (tools/run_tests.py): each job's CPU minutes are reported where the operating
+system counts them, and the floors job starts at the lowest scheduling priority, so that it takes
+only the cores the queued jobs leave idle. The POSIX branches run for real; the Windows branches
+by emulation (no ``resource`` module; ``os.name``)."""
 
 from __future__ import annotations
 
@@ -21,6 +22,21 @@ def run_tests():
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="the resource module is POSIX")
+def test_a_reaped_child_s_cpu_time_is_counted(run_tests):
+    before = run_tests.children_cpu_seconds()
+    subprocess.run([sys.executable, "-c", "sum(i * i for i in range(3_000_000))"], check=True)
+    assert run_tests.children_cpu_seconds() - before > 0.05
+    # the control: nothing reaped, nothing counted
+    again = run_tests.children_cpu_seconds()
+    assert run_tests.children_cpu_seconds() == again
+
+
+def test_without_the_resource_module_no_cpu_time_is_claimed(run_tests, monkeypatch):
+    monkeypatch.setitem(sys.modules, "resource", None)  # import resource raises ImportError
+    assert run_tests.children_cpu_seconds() is None
 
 
 def _niceness_of_a_child(**popen) -> int:
