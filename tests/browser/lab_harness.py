@@ -645,11 +645,13 @@ class NotebookRunner:
         try:
             self._open_and_run(run)
             if run.ok:
-                # Before any test moves a control: the outputs as the run left them.
+                # Before any test moves a control: the outputs as the run left them (saved to
+                # disk only for the runner that keeps executions, as before).
                 run.model = page.evaluate(
-                    """async (p) => { const context = window.__plab.panel(p).context;
-                                      await context.save(); return context.model.toJSON(); }""",
-                    name)
+                    """async ([p, save]) => { const context = window.__plab.panel(p).context;
+                                              if (save) await context.save();
+                                              return context.model.toJSON(); }""",
+                    [name, self.executions is not None])
                 if self.executions is not None and not run.console_errors:
                     self.executions[name] = (run.model, run.seconds)
         finally:
