@@ -1,6 +1,9 @@
-"""What several test folders share, made once per test session: models (a system's symbolic
-derivation takes a second or two, and the models are immutable), and the notebooks run in
-JupyterLab."""
+"""What several test folders share: models made once per test session (a system's symbolic
+derivation takes a second or two, and the models are immutable), the notebooks run in
+JupyterLab, and the guard of the refusals that must come before any work."""
+
+import contextlib
+import tracemalloc
 
 import pytest
 
@@ -94,3 +97,46 @@ def notebooks_run_in_jupyterlab():
     The website's build (tests/site, after tests/browser in the same job) shows these outputs
     instead of running the same notebooks under the same package once more."""
     return {}
+
+
+#: More memory than any refusal needs (checking 10**8 values takes 100 MB) and far less than
+#: the arrays of the runs refused (gigabytes to tebibytes).
+REFUSAL_MEMORY = 256 * 2**20
+
+
+@pytest.fixture
+def before_any_work(monkeypatch):
+    """A context for a call that must be refused before any work: inside it, stepping a
+    trajectory or drawing a figure fails the test, and so does holding more than
+    :data:`REFUSAL_MEMORY` at once (NumPy's arrays count: it reports them to tracemalloc).
+
+    The work is counted, not timed, so the check holds on a slow or busy machine (the floors
+    run at the lowest priority) and fails on a fast one that did the work anyway."""
+    from matplotlib.figure import Figure
+
+    from pendulum_lab.driver.loops import CompiledMethod
+
+    @contextlib.contextmanager
+    def guard():
+        done = []
+
+        def refused(what):
+            def work(*args, **kwargs):
+                done.append(what)  # kept apart: the code under test might catch the error
+                raise AssertionError(f"{what} before the refusal")
+            return work
+
+        with monkeypatch.context() as patch:
+            patch.setattr(CompiledMethod, "advance", refused("a trajectory stepped"))
+            patch.setattr(CompiledMethod, "step_rows", refused("a state stepped"))
+            patch.setattr(Figure, "draw", refused("a figure drawn"))
+            tracemalloc.start()
+            try:
+                yield
+            finally:
+                peak = tracemalloc.get_traced_memory()[1]
+                tracemalloc.stop()
+        assert not done, done
+        assert peak < REFUSAL_MEMORY, f"{peak / 2**20:.0f} MiB held before the refusal"
+
+    return guard

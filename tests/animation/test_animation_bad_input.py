@@ -7,7 +7,6 @@ pathlib's or matplotlib's errors, ffmpeg's command line, or hours of drawing.
 """
 
 import dataclasses
-import time
 import warnings
 from pathlib import Path
 
@@ -69,14 +68,12 @@ CASES = {
 
 
 @pytest.mark.parametrize("case", CASES)
-def test_bad_input_is_refused_before_any_frame_is_drawn(case, folder):
+def test_bad_input_is_refused_before_any_frame_is_drawn(case, folder, before_any_work):
     if "/proc" in case and not Path("/proc").is_dir():
         pytest.skip("no /proc on this system (macOS, Windows): a folder that cannot be written")
     call, error, message = CASES[case]
-    start = time.perf_counter()
-    with pytest.raises(error, match=message):
+    with before_any_work(), pytest.raises(error, match=message):
         call(folder)
-    assert time.perf_counter() - start < 10
     assert list(folder.iterdir()) == []  # nothing left behind
 
 

@@ -106,12 +106,12 @@ def test_check_names_an_unreachable_hub_and_a_repository_that_cannot_be_pulled(t
     repo = tmp_path / "course.git"
     subprocess.run(["git", "init", "--quiet", "--bare", str(repo)], check=True)
     hub = f"http://127.0.0.1:{_closed_port()}"
-    problems = check_handout(hub, (tmp_path / "missing.git").as_uri(), timeout=10)
+    problems = check_handout(hub, (tmp_path / "missing.git").as_uri(), timeout=60)
     assert len(problems) == 2
     assert "cannot be reached" in problems[0] and hub in problems[0]
     assert "cannot be pulled" in problems[1] and "missing.git" in problems[1]
     # an empty repository is readable but has nothing to hand out
-    problems = check_handout(hub, repo.as_uri(), branch="main", timeout=10)
+    problems = check_handout(hub, repo.as_uri(), branch="main", timeout=60)
     assert any("has no branch 'main'" in problem for problem in problems)
     # and the command reports them, exiting with 1, printing no link
     done = subprocess.run([sys.executable, "-m", "pendulum_lab", "handout-link", "--hub", hub,

@@ -5,8 +5,6 @@ None); runs beyond the work budget are refused before their arrays are made (a L
 estimate over t_end = 1e12 used to ask NumPy for 14.6 TiB).
 """
 
-import time
-
 import numpy as np
 import pytest
 
@@ -43,18 +41,16 @@ CASES = {
     "stroboscopic, 1e12 periods": (lambda: chaos.stroboscopic_section(
         DRIVEN, [0.2], [0.0], n_periods=10**12), ValueError, "budget"),
     "bifurcation, 1e8 values": (lambda: chaos.bifurcation_diagram(
-        DRIVEN, "drive_amplitude", np.linspace(1.0, 1.5, 10**8), theta0=[0.2], omega0=[0.0]),
+        DRIVEN, "drive_amplitude", np.broadcast_to(1.2, 10**8), theta0=[0.2], omega0=[0.0]),
         ValueError, "100000000 `values` over .* = 4e\\+04 steps x 100000000 trajectories"),
 }
 
 
 @pytest.mark.parametrize("case", CASES)
-def test_bad_input_is_refused_at_once_naming_the_argument(case):
+def test_bad_input_is_refused_at_once_naming_the_argument(case, before_any_work):
     call, error, message = CASES[case]
-    start = time.perf_counter()
-    with pytest.raises(error, match=message):
+    with before_any_work(), pytest.raises(error, match=message):
         call()
-    assert time.perf_counter() - start < 30
 
 
 def test_the_valid_seeds_are_accepted_and_fix_the_direction():
