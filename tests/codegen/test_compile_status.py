@@ -42,6 +42,14 @@ def slow_source(seconds: float, tag: str) -> str:
     return f"import time\ntime.sleep({seconds})\nVALUE = {tag!r}\n"
 
 
+def source_lasting_until(condition: str, tag: str) -> str:
+    """A module that runs until ``condition`` holds (at most 60 s): a compilation that lasts
+    until its note has been seen, however late a busy machine runs the note's thread."""
+    return (f"import sys, time\nend = time.monotonic() + 60\n"
+            f"while not ({condition}) and time.monotonic() < end:\n    time.sleep(0.01)\n"
+            f"VALUE = {tag!r}\n")
+
+
 def test_listeners_hear_the_start_and_the_end(fresh_cache):
     events = []
     with listen(events.append):
@@ -115,7 +123,9 @@ def test_bad_arguments_are_refused():
 
 # ------------------------------------------------------------------------------- the note
 def test_the_note_says_what_compiles_after_the_delay(fresh_cache, capsys, monkeypatch):
-    cache.load_generated("status_test_c", slow_source(0.3, "c"), what="a slow test module")
+    shown = "'compiling a slow test module' in sys.stderr.getvalue()"  # capsys's stream
+    cache.load_generated("status_test_c", source_lasting_until(shown, "c"),
+                         what="a slow test module")
     err = capsys.readouterr().err.splitlines()
     assert err[0] == "compiling a slow test module, once per machine…"
     assert err[-1].startswith("compiled a slow test module in ")
@@ -148,7 +158,10 @@ def test_in_a_jupyter_kernel_the_note_is_one_display_updated_in_place(fresh_cach
                                          display=display_module)
     monkeypatch.setitem(sys.modules, "IPython", fake_ipython)
     monkeypatch.setitem(sys.modules, "IPython.display", display_module)
-    cache.load_generated("status_test_g", slow_source(0.4, "g"), what="a test module")
+    display_module.shown = shown
+    updated = "len(sys.modules['IPython.display'].shown) >= 2"  # shown, then updated once
+    cache.load_generated("status_test_g", source_lasting_until(updated, "g"),
+                         what="a test module")
     kinds = [kind for kind, _, _ in shown]
     assert kinds[0] == "new" and set(kinds[1:]) == {"update"} and len(kinds) >= 3
     assert len({display_id for _, display_id, _ in shown}) == 1
