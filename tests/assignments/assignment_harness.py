@@ -9,26 +9,16 @@ they compiled for every later sandbox to start from (a copy each).
 from __future__ import annotations
 
 import copy
-import importlib.util
-import sys
 from pathlib import Path
 
 import nbformat
+from repository_scripts import load_script
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = REPO_ROOT / "test-artifacts" / "assignments"
 
 
-def _load_tool():
-    spec = importlib.util.spec_from_file_location("assignment_tool",
-                                                  REPO_ROOT / "tools" / "assignments.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
-
-
-tool = _load_tool()
+tool = load_script("tools/assignments.py", "assignment_tool")
 NAMES = [path.stem for path in tool.masters()]
 
 

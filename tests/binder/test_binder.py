@@ -17,7 +17,6 @@ the reason, except under ``CI=true``, where it fails them.
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import json
 import os
 import re
@@ -33,6 +32,7 @@ import pytest
 from packaging.requirements import Requirement
 from packaging.specifiers import SpecifierSet
 from packaging.version import Version
+from repository_scripts import load_script
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 BINDER = REPO_ROOT / "binder"
@@ -281,10 +281,7 @@ def test_repo2docker_accepts_the_binder_configuration(monkeypatch):
 def _python_for(version: str) -> tuple[str, str]:
     """An interpreter for ``version`` (on PATH or pyenv's, as the Makefile finds its own) or,
     failing that, this one; with its X.Y."""
-    spec = importlib.util.spec_from_file_location("find_python",
-                                                  REPO_ROOT / "tools" / "find_python.py")
-    find_python = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(find_python)
+    find_python = load_script("tools/find_python.py")
     major, minor = (int(part) for part in version.split("."))
     candidate = find_python.find((major, minor)) or sys.executable
     probe = subprocess.run(

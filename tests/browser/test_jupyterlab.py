@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import importlib.util
 import json
 import time
 from dataclasses import dataclass
@@ -47,12 +46,10 @@ from pathlib import Path
 
 import pytest
 from lab_harness import SCREENSHOTS, NotebookRun, list_notebooks, notebook_dir
+from repository_scripts import load_script
 
-# How checked outputs are stored and compared (tools/ is not a package).
-_TOOL = Path(__file__).resolve().parents[2] / "tools" / "refresh_checked_outputs.py"
-_spec = importlib.util.spec_from_file_location("refresh_checked_outputs", _TOOL)
-checked_outputs = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(checked_outputs)
+# How checked outputs are stored and compared.
+checked_outputs = load_script("tools/refresh_checked_outputs.py")
 
 NOTEBOOKS = list_notebooks()
 if not NOTEBOOKS:

@@ -27,7 +27,6 @@ the reason, except under ``CI=true``, where it fails them.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import re
@@ -44,16 +43,14 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from repository_scripts import load_script
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 README = REPO_ROOT / "README.md"
 STUDENT_SECTION = "## Open the course"
 # The README's fenced block of each OS: its language tag, and the interpreter it must name.
 STUDENT_BLOCKS = {"bat": "py", "sh": "python3"}
-_spec = importlib.util.spec_from_file_location("find_python",
-                                               REPO_ROOT / "tools" / "find_python.py")
-find_python = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(find_python)
+find_python = load_script("tools/find_python.py")
 
 WINDOWS = os.name == "nt"
 

@@ -1,16 +1,11 @@
 """The script that stores checked notebook outputs keeps exactly what nbval compares, and
 compares a run's checked outputs with them by the same rule."""
 
-import importlib.util
-from pathlib import Path
-
 import nbformat
 import pytest
+from repository_scripts import load_script
 
-SCRIPT = Path(__file__).parents[2] / "tools" / "refresh_checked_outputs.py"
-spec = importlib.util.spec_from_file_location("refresh_checked_outputs", SCRIPT)
-tool = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(tool)
+tool = load_script("tools/refresh_checked_outputs.py")
 
 
 def notebook(tmp_path, cells):

@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import subprocess
 import sys
@@ -13,20 +12,13 @@ import types
 from pathlib import Path
 
 import pytest
+from repository_scripts import load_script
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
-def load(path: Path) -> types.ModuleType:
-    """The script at ``path`` as a module (neither the root nor tools/ is a package)."""
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-open_course = load(REPO_ROOT / "open_course.py")
-find_python = load(REPO_ROOT / "tools" / "find_python.py")
+open_course = load_script("open_course.py")
+find_python = load_script("tools/find_python.py")
 
 
 # --------------------------------------------------------------------------- open_course.py

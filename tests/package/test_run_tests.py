@@ -5,23 +5,17 @@ by emulation (no ``resource`` module; ``os.name``)."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
-
-TOOL = Path(__file__).resolve().parents[2] / "tools" / "run_tests.py"
+from repository_scripts import load_script
 
 
 @pytest.fixture(scope="module")
 def run_tests():
-    spec = importlib.util.spec_from_file_location("run_tests_tool", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("tools/run_tests.py", "run_tests_tool")
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="the resource module is POSIX")
